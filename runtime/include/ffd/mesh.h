@@ -1,0 +1,54 @@
+#pragma once
+// Triangle surface meshes and their clean-up. Meshes "from the wild" carry duplicate
+// vertices, unused vertices, duplicate and degenerate triangles and stray pieces; the
+// lattice builder wants a clean indexed triangle list.
+#include <string>
+#include <vector>
+
+#include "ffd/types.h"
+
+namespace ffd {
+
+struct SurfaceMesh {
+  std::vector<Vec3> vertices;                 // (V) positions, metres
+  std::vector<std::array<Index, 3>> triangles;  // (F) counter-clockwise seen from outside
+};
+
+struct MeshCleanOptions {
+  // Vertices closer than weld_tolerance * (bounding-box diagonal) are merged. 0 welds only
+  // bit-identical positions.
+  double weld_tolerance = 1e-9;
+  // Connected components with fewer triangles than this fraction of the largest component
+  // are dropped (stray scan fragments). 0 keeps every component.
+  double min_component_fraction = 0.01;
+};
+
+struct MeshCleanReport {
+  std::size_t input_vertices = 0;
+  std::size_t input_triangles = 0;
+  std::size_t welded_vertices = 0;          // vertices merged into another one
+  std::size_t unused_vertices = 0;          // vertices no kept triangle references
+  std::size_t degenerate_triangles = 0;     // repeated index or zero area
+  std::size_t duplicate_triangles = 0;      // same vertex set as another triangle, same winding
+  std::size_t opposite_pair_triangles = 0;  // both triangles of a pair with opposite winding
+  std::size_t stray_component_triangles = 0;
+  std::size_t stray_components = 0;
+  std::size_t output_vertices = 0;
+  std::size_t output_triangles = 0;
+  // One line saying what was cleaned, e.g. "welded 403 duplicate vertices; ...", or "clean".
+  std::string summary() const;
+};
+
+// Returns the cleaned mesh; `report` says what was removed. Throws std::invalid_argument
+// when nothing is left (no triangles) or an index is out of range.
+SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options,
+                       MeshCleanReport& report);
+
+// Built-in shapes, centred at the origin, outward-facing.
+SurfaceMesh make_box_mesh(const Vec3& size);                 // size: full edge lengths, m
+SurfaceMesh make_sphere_mesh(double radius, int subdivisions);  // icosphere, 0..6 subdivisions
+
+// Axis-aligned bounds of the vertices (min, max).
+std::pair<Vec3, Vec3> mesh_bounds(const SurfaceMesh& mesh);
+
+}  // namespace ffd

@@ -1,0 +1,128 @@
+#pragma once
+// Model: everything about a scene that does not change while it runs — lattice topology,
+// rest shape, FFD AABB local coordinates, springs, shape-matching regions, planes, the
+// assembled pipeline. Built once by compile(); step() only reads it.
+// Nodes, cells and boxes of all objects live in flat arrays; an object owns a contiguous
+// range of each.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ffd/spec.h"
+#include "ffd/state.h"
+
+namespace ffd {
+
+// The stages a step may run, in order. compile() keeps only those the effects ask for.
+enum class Stage : std::uint8_t {
+  Gravity,      // v += g dt
+  Dynamics,     // internal forces and integration of the lattice nodes
+  BoxUpdate,    // FFD AABB nodes from the lattice (eq. 2), section 4
+  BroadPhase,   // spatial hash of the boxes, section 6.1
+  NarrowPhase,  // node-in-box tests + immediate response, Algorithm 1, sections 6.2 and 7
+  Planes,       // static planes: node-below-plane tests + the same response
+  Count
+};
+const char* stage_name(Stage s);
+
+struct ObjectModel {
+  std::string name;
+  DynamicsKind dynamics = DynamicsKind::MassSpring;
+  MassSpringParams mass_spring;
+  ShapeMatchingParams shape_matching;
+  double cell_size = 0.0;         // m
+  // Placement at time zero: world = initial_rotation * (object frame) + initial_translation.
+  Mat3 initial_rotation = Mat3::Identity();
+  Vec3 initial_translation = Vec3::Zero();  // m
+  Vec3 initial_velocity = Vec3::Zero();     // m/s
+  Vec3 lattice_origin;            // m, corner of lattice cell (0,0,0) at rest
+  Vec3i lattice_dims;             // cells per axis of the full regular grid
+  Index node_begin = 0, node_end = 0;      // range in Model::node_*
+  Index cell_begin = 0, cell_end = 0;      // range in Model::cell_*
+  Index box_begin = 0, box_end = 0;        // range in Model::box_*
+  Index spring_begin = 0, spring_end = 0;  // range in Model::springs
+  Index region_begin = 0, region_end = 0;  // range in Model::regions
+  // The embedded surface: rest positions, and for every vertex its cell and local
+  // coordinates (s, t, u) in [0, 1]^3 (eq. 1, divided by the cell size).
+  SurfaceMesh surface;
+  std::vector<Index> vertex_cell;  // global cell index
+  std::vector<Vec3> vertex_local;
+};
+
+struct Spring {
+  Index a, b;              // global node indices
+  double rest_length;      // m
+  double inv_denominator;  // 1 / ((1 + gamma)(w_a + w_b) + alpha~), the XPBD constant of this spring
+};
+
+// A lattice shape-matching region (FastLSM): the nodes within half-width w of its centre.
+struct Region {
+  Index member_begin, member_end;  // range in Model::region_members
+  Vec3 rest_centroid;              // m, mass-weighted
+  double mass;                     // kg
+};
+
+struct PlaneModel {
+  std::string name;
+  Vec3 normal;    // unit
+  double offset;  // m
+};
+
+struct Model {
+  SimulationSettings settings;   // as compiled (validated)
+  std::vector<Stage> pipeline;   // the stages this scene runs, in order
+
+  std::vector<ObjectModel> objects;
+
+  // Lattice nodes (N).
+  std::vector<Vec3> node_rest;        // m
+  std::vector<double> node_mass;      // kg
+  std::vector<double> node_inv_mass;  // 1/kg
+  std::vector<Index> node_object;
+
+  // Lattice cells (C): 8 node indices each, corner j = i + 2 j + 4 k ordering (x fastest).
+  std::vector<std::array<Index, 8>> cell_nodes;
+  std::vector<Vec3i> cell_coord;      // integer lattice coordinates within the object
+  std::vector<Index> cell_object;
+  std::vector<double> cell_inv_mass;  // 1/kg, inverse of the summed mass share of the cell
+  std::vector<Index> cell_box;        // box of the cell, kNoIndex for interior cells
+  // Cells that share a lattice node with cell c (c included): rows of a CSR table. When a
+  // response moves c's nodes these cells' boxes are stale.
+  std::vector<Index> cell_neighbour_begin;  // (C + 1)
+  std::vector<Index> cell_neighbours;
+
+  // FFD AABBs (B): one per surface cell. 8 boundary nodes at the corners of the bounding
+  // box of the surface inside the cell + the surface's centre of mass, all in the cell's
+  // local coordinates (section 4).
+  std::vector<Index> box_cell;
+  std::vector<std::array<Vec3, 9>> box_local;
+
+  std::vector<Spring> springs;
+  std::vector<Region> regions;
+  std::vector<Index> region_members;      // node indices
+  std::vector<Index> node_region_count;   // regions containing each node
+
+  std::vector<PlaneModel> planes;
+
+  // Broad phase.
+  Index hash_table_size = 0;  // 0 when the scene has no collisions at all
+  double hash_cell_size = 0.0;
+
+  std::size_t node_count() const { return node_rest.size(); }
+  std::size_t cell_count() const { return cell_nodes.size(); }
+  std::size_t box_count() const { return box_cell.size(); }
+};
+
+struct CompileError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Validates the spec, cleans the meshes, builds lattices, boxes, springs and regions, and
+// assembles the pipeline from the effects. `log` receives one line per noteworthy fact
+// (what mesh clean-up removed, lattice sizes). Throws CompileError naming the object.
+Model compile(const SceneSpec& spec, std::vector<std::string>& log);
+
+// The state at time zero: rest lattice placed by each object's position, rotation, velocity.
+State initial_state(const Model& model);
+
+}  // namespace ffd

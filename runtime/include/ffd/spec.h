@@ -1,0 +1,95 @@
+#pragma once
+// SceneSpec: what a scene asks for, as parsed from a scene file (scenarios/) or built in
+// code. compile() (model.h) validates it and derives everything the step needs.
+// Units are SI: metres, seconds, kilograms; angles in degrees where a name says so.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ffd/mesh.h"
+
+namespace ffd {
+
+// The effects a scene may call for. The step is assembled from only these (see step.h).
+enum class Effect : std::uint32_t {
+  Gravity = 1u << 0,         // uniform acceleration `gravity`
+  Planes = 1u << 1,          // static planes (a floor, walls of a bin)
+  InterCollision = 1u << 2,  // FFD AABB collisions between different objects
+  SelfCollision = 1u << 3,   // FFD AABB collisions between non-adjacent cells of one object
+  Friction = 1u << 4,        // tangential term of eq. 8 (beta); without it beta is unused
+};
+using EffectSet = std::uint32_t;
+inline constexpr bool has(EffectSet set, Effect e) { return (set & static_cast<std::uint32_t>(e)) != 0; }
+inline constexpr EffectSet operator|(Effect a, Effect b) {
+  return static_cast<std::uint32_t>(a) | static_cast<std::uint32_t>(b);
+}
+inline constexpr EffectSet operator|(EffectSet a, Effect b) { return a | static_cast<std::uint32_t>(b); }
+
+// Name <-> effect, for scene files and reports ("gravity", "planes", "inter_collision",
+// "self_collision", "friction"). effect_from_name returns false for an unknown name.
+const char* effect_name(Effect e);
+bool effect_from_name(const std::string& name, Effect& out);
+inline constexpr Effect kAllEffects[] = {Effect::Gravity, Effect::Planes, Effect::InterCollision,
+                                         Effect::SelfCollision, Effect::Friction};
+
+enum class DynamicsKind : std::uint8_t {
+  MassSpring,     // edge, face- and body-diagonal springs, XPBD compliant constraints
+  ShapeMatching,  // lattice shape matching (FastLSM-style regions of half-width w)
+};
+
+struct MassSpringParams {
+  double stiffness = 5.0e3;  // N/m per spring; any value > 0 is stable (XPBD)
+  double damping = 0.5;      // N*s/m along each spring
+  int iterations = 4;        // Gauss-Seidel sweeps per step
+};
+
+struct ShapeMatchingParams {
+  double stiffness = 0.5;     // fraction of the way to the goal shape per step, (0, 1]
+  int region_half_width = 1;  // w: a region spans (2w+1)^3 lattice nodes
+  double damping = 2.0;       // 1/s, linear damping of the lattice node velocities
+};
+
+struct ObjectSpec {
+  std::string name;
+  std::string source;  // where the surface came from (mesh path or "box", "sphere"), for logs
+  SurfaceMesh mesh;    // in the object's own frame, metres (already scaled)
+  Vec3 position = Vec3::Zero();     // m, translation applied after rotation
+  Vec3 rotation_deg = Vec3::Zero(); // rotation about x, then y, then z (degrees)
+  Vec3 velocity = Vec3::Zero();     // m/s, initial velocity of every lattice node
+  double cell_size = 0.05;          // m, FFD lattice cell edge
+  double mass = 1.0;                // kg, whole object
+  bool fill_interior = false;       // also keep interior cells (flood fill) for a solid feel
+  MeshCleanOptions clean;
+  DynamicsKind dynamics = DynamicsKind::MassSpring;
+  MassSpringParams mass_spring;
+  ShapeMatchingParams shape_matching;
+};
+
+struct PlaneSpec {
+  std::string name;
+  Vec3 normal = Vec3::UnitY();  // points out of the solid side; normalised at compile time
+  double offset = 0.0;          // plane: normal . x = offset (m)
+};
+
+// Scene-wide settings. alpha, beta and gravity are the starting values of State::params,
+// which commands may change while a scene runs.
+struct SimulationSettings {
+  double dt = 0.001;                     // s, fixed step
+  Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s^2
+  double alpha = 0.5;                    // collision damping, eq. 8, [0, 1]
+  double beta = 0.3;                     // friction, eq. 8, [0, 1]
+  std::uint64_t seed = 1;                // for anything random a scene asks for
+  EffectSet effects = 0;
+  int hash_table_size = 4000;            // buckets (paper: 4000); grown for large scenes
+  double hash_cell_size = 0.0;           // m; 0 = the largest object cell size
+  double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
+};
+
+struct SceneSpec {
+  std::string name;
+  SimulationSettings settings;
+  std::vector<ObjectSpec> objects;
+  std::vector<PlaneSpec> planes;
+};
+
+}  // namespace ffd

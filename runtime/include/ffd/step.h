@@ -1,0 +1,74 @@
+#pragma once
+// One fixed step of the simulation: the Model's pipeline of stages run over the State, each
+// timed and counted into a StepReport. step() never allocates: every buffer it needs lives
+// in a Scratch sized by make_scratch(); overflow is reported as a flag, and grow_scratch()
+// (between steps) makes room.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "ffd/model.h"
+#include "ffd/state.h"
+
+namespace ffd {
+
+// Work counters of one stage in one step. A counter a stage has no use for stays zero.
+struct StageCounters {
+  std::uint32_t boxes_updated = 0;      // FFD AABBs recomputed from the lattice (eq. 2)
+  std::uint32_t hash_entries = 0;       // (box, hash cell) entries inserted
+  std::uint32_t inter_pairs_tested = 0; // box pairs of different objects given node tests
+  std::uint32_t self_pairs_tested = 0;  // box pairs of one object given node tests
+  std::uint32_t node_tests = 0;         // node-in-box or node-below-plane tests
+  std::uint32_t inter_contacts = 0;     // nodes found inside a box of another object
+  std::uint32_t self_contacts = 0;      // nodes found inside a non-adjacent box of the same object
+  std::uint32_t plane_contacts = 0;     // boxes found below a static plane
+};
+
+inline constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::Count);
+
+struct StepReport {
+  std::uint64_t step = 0;                          // index of the step this report describes
+  std::array<std::int64_t, kStageCount> stage_ns{};  // wall time per stage, ns (-1: not run)
+  std::array<StageCounters, kStageCount> counters{};
+  std::int64_t total_ns = 0;
+  double max_box_penetration_m = 0.0;  // deepest node-in-box or node-below-plane depth r
+  bool finite = true;                  // every x and v finite after the step
+  bool hash_overflow = false;          // broad phase ran out of entry room; grow_scratch() fixes it
+};
+
+// Working memory of step(): derived per step, never part of the State.
+struct Scratch {
+  // World positions of the 9 nodes of every FFD AABB (8 corners, then centre of mass), and
+  // whether they match the current lattice (a response moves lattice nodes and makes the
+  // boxes of the neighbouring cells stale).
+  std::vector<std::array<Vec3, 9>> box_nodes;
+  std::vector<std::uint8_t> box_valid;
+  std::vector<Vec3> box_min, box_max;  // world AABB of each box's nodes at hash time
+  // Spatial hash as counting-sorted arrays: bucket b holds entries[bucket_begin[b] ..
+  // bucket_begin[b + 1]).
+  struct HashEntry {
+    Index box;
+    std::int64_t gx, gy, gz;  // integer hash-grid coordinates
+  };
+  std::vector<Index> bucket_begin;      // (T + 1)
+  std::vector<HashEntry> entries;       // capacity grown between steps
+  std::vector<HashEntry> entries_unsorted;
+  std::vector<Index> entry_bucket;
+  // Dynamics.
+  std::vector<Vec3> x_prev;        // positions at the start of the step
+  std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
+  std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
+};
+
+Scratch make_scratch(const Model& model);
+// Makes room for what the last step reported it lacked (call between steps).
+void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last);
+
+// Advances `state` by one step of model.settings.dt and fills `report`.
+void step(const Model& model, State& state, Scratch& scratch, StepReport& report);
+
+// Recomputes every box's nodes from the lattice (eq. 2). Used by step() and by tools
+// that need the boxes of a State (frames, tests).
+void update_all_boxes(const Model& model, const State& state, Scratch& scratch);
+
+}  // namespace ffd

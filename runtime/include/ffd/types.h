@@ -1,0 +1,18 @@
+#pragma once
+// Basic numeric types. All lengths in metres, times in seconds, masses in kilograms.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+
+namespace ffd {
+
+using Vec3 = Eigen::Vector3d;
+using Vec3i = Eigen::Vector3i;
+using Mat3 = Eigen::Matrix3d;
+using Quat = Eigen::Quaterniond;
+using Index = std::uint32_t;
+
+inline constexpr Index kNoIndex = 0xFFFFFFFFu;
+
+}  // namespace ffd

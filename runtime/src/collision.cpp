@@ -1,0 +1,247 @@
+#include "collision.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ffd/box_test.h"
+#include "ffd/response.h"
+#include "ffd/trilinear.h"
+
+namespace ffd {
+
+void update_box(const Model& model, const State& state, Scratch& scratch, Index b) {
+  const std::array<Index, 8>& corner = model.cell_nodes[model.box_cell[b]];
+  const std::array<Vec3, 9>& local = model.box_local[b];
+  std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
+  for (int k = 0; k < 9; ++k) nodes[k] = trilinear_map(local[k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+  scratch.box_valid[b] = 1;
+}
+
+std::int64_t hash_grid_coordinate(double x, double inv_cell) {
+  constexpr double kLimit = 4503599627370496.0;  // 2^52: beyond it cells are meaningless anyway
+  const double g = std::floor(x * inv_cell);
+  if (!(g > -kLimit)) return g < 0.0 ? static_cast<std::int64_t>(-kLimit) : 0;  // -inf / NaN
+  if (!(g < kLimit)) return static_cast<std::int64_t>(kLimit);
+  return static_cast<std::int64_t>(g);
+}
+
+namespace {
+
+// How far back (in steps) a node's way into a box is trusted to pick the contact face.
+constexpr double kRecentEntrySteps = 2.0;
+
+// Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
+void invalidate_around(const Model& model, Scratch& scratch, Index cell) {
+  for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
+    const Index b = model.cell_box[model.cell_neighbours[i]];
+    if (b != kNoIndex) scratch.box_valid[b] = 0;
+  }
+}
+
+void ensure_box(const Model& model, const State& state, Scratch& scratch, Index b, StageCounters& counters) {
+  if (scratch.box_valid[b]) return;
+  update_box(model, state, scratch, b);
+  ++counters.boxes_updated;
+}
+
+Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes) {
+  Vec3 v = Vec3::Zero();
+  for (Index n : nodes) v += state.v[n];
+  return v * 0.125;
+}
+
+// Section 7 for a node of cell B found inside the box of cell A: n is A's outward normal of
+// least penetration, r the depth (eq. 7).
+template <bool kFriction>
+void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, const Vec3& n, double r) {
+  const std::array<Index, 8>& nodes_a = model.cell_nodes[cell_a];
+  const std::array<Index, 8>& nodes_b = model.cell_nodes[cell_b];
+  const double inv_a = model.cell_inv_mass[cell_a], inv_b = model.cell_inv_mass[cell_b];
+  const Vec3 va = mean_velocity(state, nodes_a), vb = mean_velocity(state, nodes_b);
+  if ((vb - va).dot(n) < 0.0) {  // eq. 8 only while the cells approach
+    const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
+    const Vec3 v_ref = (ma * va + mb * vb) / (ma + mb);
+    const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
+    for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta);
+    for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta);
+  }
+  const PositionShares share = position_shares(inv_a, inv_b);  // eq. 9
+  const Vec3 move_a = -share.a * r * n, move_b = share.b * r * n;
+  for (Index i : nodes_a) state.x[i] += move_a;
+  for (Index i : nodes_b) state.x[i] += move_b;
+}
+
+// Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop).
+template <bool kFriction>
+void test_nodes(const Model& model, State& state, Scratch& scratch, Index mover, Index container, bool self,
+                StageCounters& counters, double& max_depth) {
+  BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+  if (planes.degenerate) {
+    counters.node_tests += 9;  // tested and found nothing: a degenerate box contains no node
+    return;
+  }
+  const Index cell_a = model.box_cell[container], cell_b = model.box_cell[mover];
+  Vec3 relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
+  for (int k = 0; k < 9; ++k) {
+    ++counters.node_tests;
+    const NodeInBox hit = node_in_box(planes, scratch.box_nodes[mover][k], relative_velocity, kRecentEntrySteps * model.settings.dt);
+    if (!hit.inside) continue;
+    if (self) ++counters.self_contacts;
+    else ++counters.inter_contacts;
+    max_depth = std::max(max_depth, hit.depth);
+    respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth);
+    // Update both boxes at once so the remaining tests see the corrected state.
+    invalidate_around(model, scratch, cell_a);
+    invalidate_around(model, scratch, cell_b);
+    ensure_box(model, state, scratch, container, counters);
+    ensure_box(model, state, scratch, mover, counters);
+    planes = box_planes(scratch.box_nodes[container]);
+    if (planes.degenerate) return;
+    relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
+  }
+}
+
+bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
+  return (model.cell_coord[cell_a] - model.cell_coord[cell_b]).cwiseAbs().maxCoeff() <= 1;
+}
+
+// Visits every pair of boxes whose hash-time AABBs overlap and that `wanted` accepts, once:
+// a pair is taken only in the hash cell that holds the lower corner of the overlap of the
+// two AABBs, and entries of other grid cells sharing the bucket (hash collisions) are
+// skipped. `wanted` runs first because most pairs in a bucket are neighbouring cells of one
+// object, which it rejects from two integers.
+template <class WantedFn, class PairFn>
+void for_each_candidate_pair(const Model& model, const Scratch& scratch, WantedFn&& wanted, PairFn&& visit) {
+  const double inv_cell = 1.0 / model.hash_cell_size;
+  for (Index bucket = 0; bucket < model.hash_table_size; ++bucket) {
+    const Index begin = scratch.bucket_begin[bucket], end = scratch.bucket_begin[bucket + 1];
+    for (Index i = begin; i < end; ++i) {
+      const Scratch::HashEntry& e1 = scratch.entries[i];
+      for (Index j = i + 1; j < end; ++j) {
+        const Scratch::HashEntry& e2 = scratch.entries[j];
+        if (e1.gx != e2.gx || e1.gy != e2.gy || e1.gz != e2.gz) continue;
+        const Index b1 = std::min(e1.box, e2.box), b2 = std::max(e1.box, e2.box);
+        if (!wanted(b1, b2)) continue;
+        const Vec3 lo = scratch.box_min[b1].cwiseMax(scratch.box_min[b2]);
+        const Vec3 hi = scratch.box_max[b1].cwiseMin(scratch.box_max[b2]);
+        if ((lo.array() > hi.array()).any()) continue;
+        if (hash_grid_coordinate(lo.x(), inv_cell) != e1.gx || hash_grid_coordinate(lo.y(), inv_cell) != e1.gy ||
+            hash_grid_coordinate(lo.z(), inv_cell) != e1.gz)
+          continue;
+        visit(b1, b2);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+bool build_spatial_hash(const Model& model, Scratch& scratch, StageCounters& counters) {
+  const double inv_cell = 1.0 / model.hash_cell_size;
+  const Index table = model.hash_table_size;
+  const std::size_t capacity = scratch.entries.size();
+  std::size_t count = 0;
+  bool fits = true;
+  for (Index b = 0; b < model.box_count() && fits; ++b) {
+    const std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
+    Vec3 lo = nodes[0], hi = nodes[0];
+    for (int k = 1; k < 9; ++k) {
+      lo = lo.cwiseMin(nodes[k]);
+      hi = hi.cwiseMax(nodes[k]);
+    }
+    scratch.box_min[b] = lo;
+    scratch.box_max[b] = hi;
+    const std::int64_t x0 = hash_grid_coordinate(lo.x(), inv_cell), x1 = hash_grid_coordinate(hi.x(), inv_cell);
+    const std::int64_t y0 = hash_grid_coordinate(lo.y(), inv_cell), y1 = hash_grid_coordinate(hi.y(), inv_cell);
+    const std::int64_t z0 = hash_grid_coordinate(lo.z(), inv_cell), z1 = hash_grid_coordinate(hi.z(), inv_cell);
+    // Unsigned spans: a box stretched over absurdly many cells cannot overflow the count.
+    const double cells = (static_cast<double>(x1 - x0) + 1.0) * (static_cast<double>(y1 - y0) + 1.0) *
+                         (static_cast<double>(z1 - z0) + 1.0);
+    if (!(cells <= static_cast<double>(capacity - count))) {
+      fits = false;
+      break;
+    }
+    for (std::int64_t z = z0; z <= z1; ++z)
+      for (std::int64_t y = y0; y <= y1; ++y)
+        for (std::int64_t x = x0; x <= x1; ++x) {
+          scratch.entries_unsorted[count] = {b, x, y, z};
+          scratch.entry_bucket[count] = spatial_hash(x, y, z, table);
+          ++count;
+        }
+  }
+  // Counting sort by bucket; stable, so entries of a bucket stay in box order.
+  std::fill(scratch.bucket_begin.begin(), scratch.bucket_begin.end(), 0);
+  for (std::size_t i = 0; i < count; ++i) ++scratch.bucket_begin[scratch.entry_bucket[i] + 1];
+  for (Index t = 0; t < table; ++t) scratch.bucket_begin[t + 1] += scratch.bucket_begin[t];
+  // bucket_begin[t] is now the start of bucket t; fill using a running cursor per bucket
+  // kept in the next slot's value, then shift back.
+  for (std::size_t i = 0; i < count; ++i) {
+    const Index t = scratch.entry_bucket[i];
+    scratch.entries[scratch.bucket_begin[t]++] = scratch.entries_unsorted[i];
+  }
+  for (Index t = table; t > 0; --t) scratch.bucket_begin[t] = scratch.bucket_begin[t - 1];
+  scratch.bucket_begin[0] = 0;
+  counters.hash_entries = static_cast<std::uint32_t>(count);
+  return fits;
+}
+
+template <bool kFriction>
+void collide_boxes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+  const bool inter = has(model.settings.effects, Effect::InterCollision);
+  const bool self = has(model.settings.effects, Effect::SelfCollision);
+  // Self pairs skip cells that share a lattice node: they touch by construction.
+  auto wanted = [&](Index b1, Index b2) {
+    const Index c1 = model.box_cell[b1], c2 = model.box_cell[b2];
+    if (model.cell_object[c1] != model.cell_object[c2]) return inter;
+    return self && !cells_share_node(model, c1, c2);
+  };
+  for_each_candidate_pair(model, scratch, wanted, [&](Index b1, Index b2) {
+    const bool same_object = model.cell_object[model.box_cell[b1]] == model.cell_object[model.box_cell[b2]];
+    if (same_object) ++counters.self_pairs_tested;
+    else ++counters.inter_pairs_tested;
+    ensure_box(model, state, scratch, b1, counters);
+    ensure_box(model, state, scratch, b2, counters);
+    test_nodes<kFriction>(model, state, scratch, b1, b2, same_object, counters, max_depth);
+    test_nodes<kFriction>(model, state, scratch, b2, b1, same_object, counters, max_depth);
+  });
+}
+
+template <bool kFriction>
+void collide_planes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+  const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
+  for (const PlaneModel& plane : model.planes) {
+    for (Index b = 0; b < model.box_count(); ++b) {
+      ensure_box(model, state, scratch, b, counters);
+      double deepest = 0.0;
+      for (const Vec3& p : scratch.box_nodes[b]) deepest = std::min(deepest, plane.normal.dot(p) - plane.offset);
+      counters.node_tests += 9;
+      if (!(deepest < 0.0)) continue;
+      const double r = -deepest;
+      ++counters.plane_contacts;
+      max_depth = std::max(max_depth, r);
+      const Index cell = model.box_cell[b];
+      const std::array<Index, 8>& nodes = model.cell_nodes[cell];
+      if (mean_velocity(state, nodes).dot(plane.normal) < 0.0) {
+        for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], Vec3::Zero(), plane.normal, alpha, beta);
+      }
+      const Vec3 move = r * plane.normal;  // the plane does not move: whole correction here
+      for (Index i : nodes) state.x[i] += move;
+      invalidate_around(model, scratch, cell);
+      ensure_box(model, state, scratch, b, counters);
+    }
+  }
+}
+
+std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch) {
+  std::vector<std::pair<Index, Index>> pairs;
+  for_each_candidate_pair(
+      model, scratch, [](Index, Index) { return true; }, [&](Index a, Index b) { pairs.emplace_back(a, b); });
+  return pairs;
+}
+
+template void collide_boxes<true>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_boxes<false>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_planes<true>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_planes<false>(const Model&, State&, Scratch&, StageCounters&, double&);
+
+}  // namespace ffd

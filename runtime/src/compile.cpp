@@ -1,0 +1,337 @@
+// SceneSpec -> Model: every validation and every derived constant happens here, so that
+// step() never validates or derives.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "ffd/model.h"
+#include "lattice.h"
+
+namespace ffd {
+
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+void require(bool ok, const std::string& where, const std::string& what) {
+  if (!ok) throw CompileError(where + ": " + what);
+}
+
+void validate(const SceneSpec& spec) {
+  const SimulationSettings& s = spec.settings;
+  require(std::isfinite(s.dt) && s.dt > 0.0 && s.dt <= 0.01, "simulation.dt", "must be in (0, 0.01] s (got " + fmt(s.dt) + ")");
+  require(s.gravity.allFinite(), "simulation.gravity", "must be finite");
+  require(s.alpha >= 0.0 && s.alpha <= 1.0, "simulation.alpha", "must be in [0, 1] (got " + fmt(s.alpha) + ")");
+  require(s.beta >= 0.0 && s.beta <= 1.0, "simulation.beta", "must be in [0, 1] (got " + fmt(s.beta) + ")");
+  require(s.hash_table_size >= 1, "simulation.hash_table_size", "must be >= 1");
+  require(std::isfinite(s.hash_cell_size) && s.hash_cell_size >= 0.0, "simulation.hash_cell_size", "must be >= 0 m");
+  require(s.min_box_thickness >= 0.0 && s.min_box_thickness <= 1.0, "simulation.min_box_thickness", "must be in [0, 1]");
+  for (std::size_t i = 0; i < spec.objects.size(); ++i) {
+    const ObjectSpec& o = spec.objects[i];
+    const std::string w = "object '" + o.name + "'";
+    require(std::isfinite(o.cell_size) && o.cell_size > 0.0, w + ".cell_size", "must be > 0 m (got " + fmt(o.cell_size) + ")");
+    require(std::isfinite(o.mass) && o.mass > 0.0, w + ".mass", "must be > 0 kg (got " + fmt(o.mass) + ")");
+    require(o.position.allFinite() && o.rotation_deg.allFinite() && o.velocity.allFinite(), w, "position, rotation and velocity must be finite");
+    require(!o.mesh.triangles.empty(), w + ".mesh", "has no triangles");
+    if (o.dynamics == DynamicsKind::MassSpring) {
+      require(std::isfinite(o.mass_spring.stiffness) && o.mass_spring.stiffness > 0.0, w + ".mass_spring.stiffness", "must be > 0 N/m");
+      require(std::isfinite(o.mass_spring.damping) && o.mass_spring.damping >= 0.0, w + ".mass_spring.damping", "must be >= 0 N*s/m");
+      require(o.mass_spring.iterations >= 1 && o.mass_spring.iterations <= 100, w + ".mass_spring.iterations", "must be in 1..100");
+    } else {
+      require(o.shape_matching.stiffness > 0.0 && o.shape_matching.stiffness <= 1.0, w + ".shape_matching.stiffness", "must be in (0, 1]");
+      require(o.shape_matching.region_half_width >= 1 && o.shape_matching.region_half_width <= 4, w + ".shape_matching.region_half_width", "must be in 1..4");
+      require(std::isfinite(o.shape_matching.damping) && o.shape_matching.damping >= 0.0, w + ".shape_matching.damping", "must be >= 0 1/s");
+    }
+    for (std::size_t j = 0; j < i; ++j) require(spec.objects[j].name != o.name, w, "name used twice");
+  }
+  for (const PlaneSpec& p : spec.planes) {
+    require(p.normal.allFinite() && p.normal.norm() > 1e-12, "plane '" + p.name + "'.normal", "must be a non-zero vector");
+    require(std::isfinite(p.offset), "plane '" + p.name + "'.offset", "must be finite");
+  }
+  require(spec.planes.empty() || has(s.effects, Effect::Planes), "simulation.effects",
+          "the scene declares planes but does not list the \"planes\" effect");
+}
+
+// The 28 node pairs of a cell's springs: 12 edges, 12 face diagonals, 4 body diagonals.
+std::vector<std::pair<int, int>> cell_spring_pairs() {
+  std::vector<std::pair<int, int>> pairs;
+  for (int a = 0; a < 8; ++a)
+    for (int b = a + 1; b < 8; ++b) pairs.emplace_back(a, b);  // every pair of corners is one of the three kinds
+  return pairs;
+}
+
+// Gauss-Seidel order for the springs: greedy colouring so that springs of one colour share
+// no node, then colour by colour. Consecutive projections are then independent and the CPU
+// overlaps them (a node-sorted order chains every projection on the previous one). The
+// order is a pure function of the lattice, so runs stay deterministic.
+std::vector<std::pair<Index, Index>> order_springs_by_colour(const std::vector<std::pair<Index, Index>>& pairs,
+                                                            std::size_t node_count) {
+  std::vector<std::uint64_t> used(node_count, 0);  // bit c: node already in colour c (c < 64)
+  std::vector<int> colour(pairs.size());
+  int colours = 0;
+  for (std::size_t s = 0; s < pairs.size(); ++s) {
+    const std::uint64_t busy = used[pairs[s].first] | used[pairs[s].second];
+    int c = 0;
+    while (c < 63 && (busy >> c) & 1u) ++c;  // colour 63 takes whatever is left
+    colour[s] = c;
+    used[pairs[s].first] |= std::uint64_t{1} << c;
+    used[pairs[s].second] |= std::uint64_t{1} << c;
+    colours = std::max(colours, c + 1);
+  }
+  std::vector<std::pair<Index, Index>> ordered;
+  ordered.reserve(pairs.size());
+  for (int c = 0; c < colours; ++c)
+    for (std::size_t s = 0; s < pairs.size(); ++s)
+      if (colour[s] == c) ordered.push_back(pairs[s]);
+  return ordered;
+}
+
+Mat3 rotation_from_degrees(const Vec3& deg) {
+  const double k = M_PI / 180.0;
+  // About x first, then y, then z.
+  return (Eigen::AngleAxisd(deg.z() * k, Vec3::UnitZ()) * Eigen::AngleAxisd(deg.y() * k, Vec3::UnitY()) *
+          Eigen::AngleAxisd(deg.x() * k, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+}  // namespace
+
+Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
+  validate(spec);
+  Model model;
+  model.settings = spec.settings;
+  const EffectSet effects = spec.settings.effects;
+  const std::vector<std::pair<int, int>> spring_pairs = cell_spring_pairs();
+
+  for (const ObjectSpec& o : spec.objects) {
+    ObjectModel obj;
+    obj.name = o.name;
+    obj.dynamics = o.dynamics;
+    obj.mass_spring = o.mass_spring;
+    obj.shape_matching = o.shape_matching;
+    obj.cell_size = o.cell_size;
+    obj.initial_rotation = rotation_from_degrees(o.rotation_deg);
+    obj.initial_translation = o.position;
+    obj.initial_velocity = o.velocity;
+
+    MeshCleanReport clean_report;
+    try {
+      obj.surface = clean_mesh(o.mesh, o.clean, clean_report);
+    } catch (const std::invalid_argument& e) {
+      throw CompileError("object '" + o.name + "' (" + o.source + "): " + e.what());
+    }
+    log.push_back("object '" + o.name + "' (" + o.source + "): " + std::to_string(clean_report.input_vertices) +
+                  " vertices, " + std::to_string(clean_report.input_triangles) + " triangles; " +
+                  clean_report.summary());
+
+    LatticeBuild lattice;
+    try {
+      lattice = build_lattice(obj.surface, o.cell_size, o.fill_interior, spec.settings.min_box_thickness);
+    } catch (const std::invalid_argument& e) {
+      throw CompileError("object '" + o.name + "'.cell_size: " + e.what());
+    }
+    obj.lattice_origin = lattice.origin;
+    obj.lattice_dims = lattice.dims;
+    const Index object_index = static_cast<Index>(model.objects.size());
+    const double h = o.cell_size;
+
+    // Nodes: the distinct corners of the kept cells, in linear order of the node grid.
+    const Vec3i nd = lattice.dims + Vec3i::Ones();
+    auto node_linear = [&](const Vec3i& c) {
+      return static_cast<std::size_t>(c.x()) + static_cast<std::size_t>(nd.x()) * (c.y() + static_cast<std::size_t>(nd.y()) * c.z());
+    };
+    std::vector<Index> node_of(static_cast<std::size_t>(nd.x()) * nd.y() * nd.z(), kNoIndex);
+    for (const Vec3i& c : lattice.cells)
+      for (int j = 0; j < 8; ++j) node_of[node_linear(c + Vec3i(j & 1, (j >> 1) & 1, (j >> 2) & 1))] = 0;
+    obj.node_begin = static_cast<Index>(model.node_rest.size());
+    std::vector<Vec3i> node_coord;
+    for (int k = 0; k < nd.z(); ++k)
+      for (int j = 0; j < nd.y(); ++j)
+        for (int i = 0; i < nd.x(); ++i) {
+          const Vec3i c(i, j, k);
+          std::size_t li = node_linear(c);
+          if (node_of[li] == kNoIndex) continue;
+          node_of[li] = static_cast<Index>(model.node_rest.size());
+          model.node_rest.push_back(lattice.origin + h * c.cast<double>());
+          model.node_mass.push_back(0.0);
+          model.node_object.push_back(object_index);
+          node_coord.push_back(c);
+        }
+    obj.node_end = static_cast<Index>(model.node_rest.size());
+
+    // Cells, their masses (the object's mass shared equally by its cells, each cell's share
+    // split over its 8 nodes) and boxes.
+    obj.cell_begin = static_cast<Index>(model.cell_nodes.size());
+    obj.box_begin = static_cast<Index>(model.box_cell.size());
+    const double cell_mass = o.mass / static_cast<double>(lattice.cells.size());
+    for (std::size_t c = 0; c < lattice.cells.size(); ++c) {
+      std::array<Index, 8> nodes;
+      for (int j = 0; j < 8; ++j) {
+        nodes[j] = node_of[node_linear(lattice.cells[c] + Vec3i(j & 1, (j >> 1) & 1, (j >> 2) & 1))];
+        model.node_mass[nodes[j]] += cell_mass / 8.0;
+      }
+      const Index cell_index = static_cast<Index>(model.cell_nodes.size());
+      model.cell_nodes.push_back(nodes);
+      model.cell_coord.push_back(lattice.cells[c]);
+      model.cell_object.push_back(object_index);
+      model.cell_inv_mass.push_back(1.0 / cell_mass);
+      if (lattice.cell_has_surface[c]) {
+        model.cell_box.push_back(static_cast<Index>(model.box_cell.size()));
+        model.box_cell.push_back(cell_index);
+        model.box_local.push_back(lattice.box_local[c]);
+      } else {
+        model.cell_box.push_back(kNoIndex);
+      }
+    }
+    obj.cell_end = static_cast<Index>(model.cell_nodes.size());
+    obj.box_end = static_cast<Index>(model.box_cell.size());
+    obj.vertex_cell.resize(lattice.vertex_cell.size());
+    for (std::size_t v = 0; v < lattice.vertex_cell.size(); ++v) obj.vertex_cell[v] = obj.cell_begin + lattice.vertex_cell[v];
+    obj.vertex_local = std::move(lattice.vertex_local);
+
+    // Springs (mass-spring objects): every corner pair of every cell, once per node pair.
+    obj.spring_begin = static_cast<Index>(model.springs.size());
+    if (o.dynamics == DynamicsKind::MassSpring) {
+      std::vector<std::pair<Index, Index>> pairs;
+      for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
+        for (const auto& [a, b] : spring_pairs) {
+          const Index na = model.cell_nodes[c][a], nb = model.cell_nodes[c][b];
+          pairs.emplace_back(std::min(na, nb), std::max(na, nb));
+        }
+      std::sort(pairs.begin(), pairs.end());
+      pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+      for (const auto& [a, b] : order_springs_by_colour(pairs, model.node_rest.size()))
+        model.springs.push_back({a, b, (model.node_rest[a] - model.node_rest[b]).norm(), 0.0});
+    }
+    obj.spring_end = static_cast<Index>(model.springs.size());
+
+    // Shape-matching regions (FastLSM): around every node, the nodes within half-width w
+    // (max-norm in lattice steps) reachable through cells of the object.
+    obj.region_begin = static_cast<Index>(model.regions.size());
+    if (o.dynamics == DynamicsKind::ShapeMatching) {
+      const int w = o.shape_matching.region_half_width;
+      std::vector<std::vector<Index>> node_cells(obj.node_end - obj.node_begin);
+      for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
+        for (Index n : model.cell_nodes[c]) node_cells[n - obj.node_begin].push_back(c);
+      std::vector<Index> seen_stamp(obj.node_end - obj.node_begin, kNoIndex);
+      for (Index centre = obj.node_begin; centre < obj.node_end; ++centre) {
+        const Vec3i cc = node_coord[centre - obj.node_begin];
+        std::vector<Index> members{centre};
+        seen_stamp[centre - obj.node_begin] = centre;
+        for (std::size_t q = 0; q < members.size(); ++q) {
+          for (Index c : node_cells[members[q] - obj.node_begin])
+            for (Index n : model.cell_nodes[c]) {
+              if (seen_stamp[n - obj.node_begin] == centre) continue;
+              if ((node_coord[n - obj.node_begin] - cc).cwiseAbs().maxCoeff() > w) continue;
+              seen_stamp[n - obj.node_begin] = centre;
+              members.push_back(n);
+            }
+        }
+        std::sort(members.begin(), members.end());
+        Region region;
+        region.member_begin = static_cast<Index>(model.region_members.size());
+        region.mass = 0.0;
+        region.rest_centroid = Vec3::Zero();
+        for (Index n : members) {
+          model.region_members.push_back(n);
+          region.mass += model.node_mass[n];
+          region.rest_centroid += model.node_mass[n] * model.node_rest[n];
+        }
+        region.rest_centroid /= region.mass;
+        region.member_end = static_cast<Index>(model.region_members.size());
+        model.regions.push_back(region);
+      }
+    }
+    obj.region_end = static_cast<Index>(model.regions.size());
+
+    std::size_t surface_cells = obj.box_end - obj.box_begin;
+    log.push_back("object '" + o.name + "': lattice " + std::to_string(lattice.dims.x()) + "x" +
+                  std::to_string(lattice.dims.y()) + "x" + std::to_string(lattice.dims.z()) + " of " + fmt(h) +
+                  " m cells; " + std::to_string(obj.cell_end - obj.cell_begin) + " cells kept (" +
+                  std::to_string(surface_cells) + " with surface = FFD AABBs), " +
+                  std::to_string(obj.node_end - obj.node_begin) + " nodes, " +
+                  (o.dynamics == DynamicsKind::MassSpring ? std::to_string(obj.spring_end - obj.spring_begin) + " springs"
+                                                          : std::to_string(obj.region_end - obj.region_begin) + " regions"));
+    model.objects.push_back(std::move(obj));
+  }
+
+  model.node_inv_mass.resize(model.node_mass.size());
+  for (std::size_t n = 0; n < model.node_mass.size(); ++n) model.node_inv_mass[n] = 1.0 / model.node_mass[n];
+  // XPBD (Macklin et al. 2016): alpha~ = compliance / dt^2, gamma = compliance * damping / dt.
+  for (const ObjectModel& o : model.objects) {
+    const double dt = spec.settings.dt, compliance = 1.0 / o.mass_spring.stiffness;
+    const double alpha_tilde = compliance / (dt * dt), gamma = compliance * o.mass_spring.damping / dt;
+    for (Index s = o.spring_begin; s < o.spring_end; ++s) {
+      Spring& sp = model.springs[s];
+      sp.inv_denominator = 1.0 / ((1.0 + gamma) * (model.node_inv_mass[sp.a] + model.node_inv_mass[sp.b]) + alpha_tilde);
+    }
+  }
+  model.node_region_count.assign(model.node_rest.size(), 0);
+  for (Index m : model.region_members) ++model.node_region_count[m];
+
+  // Cells sharing a node with each cell (CSR), in increasing order.
+  {
+    std::vector<std::vector<Index>> node_cells(model.node_count());
+    for (Index c = 0; c < model.cell_count(); ++c)
+      for (Index n : model.cell_nodes[c]) node_cells[n].push_back(c);
+    model.cell_neighbour_begin.push_back(0);
+    std::vector<Index> row;
+    for (Index c = 0; c < model.cell_count(); ++c) {
+      row.clear();
+      for (Index n : model.cell_nodes[c]) row.insert(row.end(), node_cells[n].begin(), node_cells[n].end());
+      std::sort(row.begin(), row.end());
+      row.erase(std::unique(row.begin(), row.end()), row.end());
+      model.cell_neighbours.insert(model.cell_neighbours.end(), row.begin(), row.end());
+      model.cell_neighbour_begin.push_back(static_cast<Index>(model.cell_neighbours.size()));
+    }
+  }
+
+  for (const PlaneSpec& p : spec.planes) {
+    const double len = p.normal.norm();
+    model.planes.push_back({p.name, p.normal / len, p.offset / len});
+  }
+
+  // The pipeline: only the stages the effects ask for (section "Effects on demand").
+  const bool box_box = has(effects, Effect::InterCollision) || has(effects, Effect::SelfCollision);
+  const bool planes = has(effects, Effect::Planes) && !model.planes.empty();
+  if (has(effects, Effect::Gravity)) model.pipeline.push_back(Stage::Gravity);
+  model.pipeline.push_back(Stage::Dynamics);
+  if (box_box || planes) model.pipeline.push_back(Stage::BoxUpdate);
+  if (box_box) {
+    model.pipeline.push_back(Stage::BroadPhase);
+    model.pipeline.push_back(Stage::NarrowPhase);
+    // Paper: 4000 buckets. Large scenes get at least two buckets per box so chains stay short.
+    model.hash_table_size = static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.box_count()));
+    double largest_cell = 0.0;
+    for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
+    model.hash_cell_size = spec.settings.hash_cell_size > 0.0 ? spec.settings.hash_cell_size : largest_cell;
+  }
+  if (planes) model.pipeline.push_back(Stage::Planes);
+  return model;
+}
+
+State initial_state(const Model& model) {
+  State state;
+  state.params.gravity = model.settings.gravity;
+  state.params.alpha = model.settings.alpha;
+  state.params.beta = model.settings.beta;
+  state.x.resize(model.node_count());
+  state.v.resize(model.node_count());
+  for (const ObjectModel& o : model.objects) {
+    for (Index n = o.node_begin; n < o.node_end; ++n) {
+      state.x[n] = o.initial_rotation * model.node_rest[n] + o.initial_translation;
+      state.v[n] = o.initial_velocity;
+    }
+  }
+  // Shape matching measures rotations from the rest frame, so a rotated object starts there.
+  state.region_rotation.assign(model.regions.size(), Quat::Identity());
+  for (const ObjectModel& o : model.objects)
+    for (Index r = o.region_begin; r < o.region_end; ++r) state.region_rotation[r] = Quat(o.initial_rotation);
+  return state;
+}
+
+}  // namespace ffd

@@ -1,0 +1,42 @@
+#include <cstring>
+
+#include "ffd/model.h"
+#include "ffd/spec.h"
+
+namespace ffd {
+
+const char* effect_name(Effect e) {
+  switch (e) {
+    case Effect::Gravity: return "gravity";
+    case Effect::Planes: return "planes";
+    case Effect::InterCollision: return "inter_collision";
+    case Effect::SelfCollision: return "self_collision";
+    case Effect::Friction: return "friction";
+  }
+  return "?";
+}
+
+bool effect_from_name(const std::string& name, Effect& out) {
+  for (Effect e : kAllEffects) {
+    if (name == effect_name(e)) {
+      out = e;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* stage_name(Stage s) {
+  switch (s) {
+    case Stage::Gravity: return "gravity";
+    case Stage::Dynamics: return "dynamics";
+    case Stage::BoxUpdate: return "box_update";
+    case Stage::BroadPhase: return "broad_phase";
+    case Stage::NarrowPhase: return "narrow_phase";
+    case Stage::Planes: return "planes";
+    case Stage::Count: break;
+  }
+  return "?";
+}
+
+}  // namespace ffd

@@ -1,0 +1,79 @@
+#include "ffd/measure.h"
+
+#include <algorithm>
+
+#include "ffd/surface_metrics.h"
+#include "ffd/trilinear.h"
+
+namespace ffd {
+
+Energy compute_energy(const Model& model, const State& state) {
+  Energy e;
+  const Vec3 g = has(model.settings.effects, Effect::Gravity) ? state.params.gravity : Vec3::Zero();
+  for (std::size_t n = 0; n < model.node_count(); ++n) {
+    e.kinetic += 0.5 * model.node_mass[n] * state.v[n].squaredNorm();
+    e.gravitational -= model.node_mass[n] * g.dot(state.x[n]);
+  }
+  for (const ObjectModel& o : model.objects) {
+    if (o.dynamics != DynamicsKind::MassSpring) continue;
+    for (Index s = o.spring_begin; s < o.spring_end; ++s) {
+      const Spring& sp = model.springs[s];
+      const double stretch = (state.x[sp.a] - state.x[sp.b]).norm() - sp.rest_length;
+      e.elastic += 0.5 * o.mass_spring.stiffness * stretch * stretch;
+    }
+  }
+  return e;
+}
+
+SurfaceMesh deformed_surface(const Model& model, const State& state, Index object) {
+  const ObjectModel& o = model.objects[object];
+  SurfaceMesh mesh;
+  mesh.triangles = o.surface.triangles;
+  mesh.vertices.resize(o.surface.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const std::array<Index, 8>& corner = model.cell_nodes[o.vertex_cell[v]];
+    mesh.vertices[v] = trilinear_map(o.vertex_local[v], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+  }
+  return mesh;
+}
+
+SurfaceContactReport measure_surface_contacts(const Model& model, const State& state, double search_radius) {
+  if (!(search_radius > 0.0))
+    for (const ObjectModel& o : model.objects) search_radius = std::max(search_radius, o.cell_size);
+  SurfaceContactReport report;
+  std::vector<SurfaceMesh> surfaces;
+  std::vector<std::pair<Vec3, Vec3>> bounds;
+  for (Index i = 0; i < model.objects.size(); ++i) {
+    surfaces.push_back(deformed_surface(model, state, i));
+    bounds.push_back(mesh_bounds(surfaces.back()));
+  }
+  auto add = [&](SurfaceContact c) {
+    report.max_penetration_m = std::max(report.max_penetration_m, c.penetration_m);
+    report.max_gap_m = std::max(report.max_gap_m, c.gap_m);
+    report.contacts.push_back(std::move(c));
+  };
+  const bool objects_collide = has(model.settings.effects, Effect::InterCollision);
+  for (std::size_t i = 0; objects_collide && i < surfaces.size(); ++i) {
+    for (std::size_t j = i + 1; j < surfaces.size(); ++j) {
+      const Vec3 lo = bounds[i].first.cwiseMax(bounds[j].first) - Vec3::Constant(search_radius);
+      const Vec3 hi = bounds[i].second.cwiseMin(bounds[j].second) + Vec3::Constant(search_radius);
+      if ((lo.array() > hi.array()).any()) continue;
+      const PairContactMetrics m = measure_pair(surfaces[i], surfaces[j], search_radius);
+      if (!m.near) continue;
+      add({model.objects[i].name, model.objects[j].name, m.penetration_m, m.gap_m});
+    }
+  }
+  if (has(model.settings.effects, Effect::Planes)) {
+    for (const PlaneModel& plane : model.planes) {
+      for (std::size_t i = 0; i < surfaces.size(); ++i) {
+        double lowest = INFINITY;
+        for (const Vec3& p : surfaces[i].vertices) lowest = std::min(lowest, plane.normal.dot(p) - plane.offset);
+        if (!(lowest < search_radius)) continue;
+        add({model.objects[i].name, plane.name, std::max(0.0, -lowest), std::max(0.0, lowest)});
+      }
+    }
+  }
+  return report;
+}
+
+}  // namespace ffd

@@ -1,0 +1,370 @@
+#include "ffd/mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ffd {
+
+namespace {
+
+using Triangle = std::array<Index, 3>;
+
+// Per component: Eigen's allFinite() computes inf - inf, which raises FE_INVALID.
+bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
+
+std::string plural(std::size_t count, const char* singular, const char* plural_form) {
+  return std::to_string(count) + " " + (count == 1 ? singular : plural_form);
+}
+
+// Positions scaled by a power of two so the largest |coordinate| is below 1: exact, and no
+// squared length or cross product of a finite input can overflow.
+std::vector<Vec3> unit_scaled_positions(const std::vector<Vec3>& vertices) {
+  double max_abs = 0.0;
+  for (const Vec3& p : vertices) max_abs = std::max(max_abs, p.cwiseAbs().maxCoeff());
+  int exponent = 0;
+  std::frexp(max_abs, &exponent);
+  // Clamped so the factor itself stays finite; inputs that tiny are sub-normal anyway.
+  const double factor = std::ldexp(1.0, -std::clamp(exponent, -1000, 1000));
+  std::vector<Vec3> scaled;
+  scaled.reserve(vertices.size());
+  for (const Vec3& p : vertices) scaled.push_back(p * factor);
+  return scaled;
+}
+
+// representative[i] = the lowest-index vertex within `tolerance` of i that is itself a
+// representative (greedy in index order, so the result is independent of any hashing).
+std::vector<Index> weld_vertices(const std::vector<Vec3>& positions, double tolerance) {
+  const std::size_t count = positions.size();
+  std::vector<Index> representative(count);
+  if (count == 0) return representative;
+
+  Vec3 lo = positions[0], hi = positions[0];
+  for (const Vec3& p : positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double diagonal = (hi - lo).norm();
+  // A cell at least as wide as the tolerance puts every partner in the 27 neighbouring
+  // cells; the floor keeps cell coordinates below ~1e12 so they fit an int64.
+  const double cell = std::max({tolerance, diagonal * 1e-12, 1e-300});
+  const double tolerance_sq = tolerance * tolerance;
+
+  using CellKey = std::array<std::int64_t, 3>;
+  auto cell_of = [&](const Vec3& p) {
+    const Vec3 c = (p - lo) / cell;
+    return CellKey{static_cast<std::int64_t>(std::floor(c.x())), static_cast<std::int64_t>(std::floor(c.y())),
+                   static_cast<std::int64_t>(std::floor(c.z()))};
+  };
+  // Vertices sorted by (cell, index): a cell's members are a contiguous, index-ordered run.
+  std::vector<std::pair<CellKey, Index>> by_cell(count);
+  for (std::size_t i = 0; i < count; ++i) by_cell[i] = {cell_of(positions[i]), static_cast<Index>(i)};
+  std::sort(by_cell.begin(), by_cell.end());
+
+  for (std::size_t i = 0; i < count; ++i) {
+    const CellKey home = cell_of(positions[i]);
+    Index best = static_cast<Index>(i);
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const CellKey key{home[0] + dx, home[1] + dy, home[2] + dz};
+          auto it = std::lower_bound(by_cell.begin(), by_cell.end(), std::make_pair(key, Index{0}));
+          for (; it != by_cell.end() && it->first == key && it->second < best; ++it) {
+            const Index j = it->second;
+            if (representative[j] == j && (positions[j] - positions[i]).squaredNorm() <= tolerance_sq) {
+              best = j;  // members are index-ordered: the first match is this cell's lowest
+              break;
+            }
+          }
+        }
+      }
+    }
+    representative[i] = best;
+  }
+  return representative;
+}
+
+// Zero area up to rounding: |e1 x e2| <= 64 eps |e1| |e2|, i.e. the corner angle is below
+// about 1e-14 rad.
+bool has_zero_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 e1 = b - a;
+  const Vec3 e2 = c - a;
+  const double bound = 64.0 * std::numeric_limits<double>::epsilon();
+  return e1.cross(e2).squaredNorm() <= bound * bound * e1.squaredNorm() * e2.squaredNorm();
+}
+
+// Vertex set of a triangle (sorted indices) and whether its winding is the "even" one;
+// two triangles on the same set have the same winding exactly when the flags agree.
+std::pair<Triangle, bool> vertex_set_and_winding(const Triangle& t) {
+  const std::size_t first = static_cast<std::size_t>(std::min_element(t.begin(), t.end()) - t.begin());
+  const Index a = t[first], b = t[(first + 1) % 3], c = t[(first + 2) % 3];
+  return {Triangle{a, std::min(b, c), std::max(b, c)}, b < c};
+}
+
+struct UnionFind {
+  std::vector<std::size_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), std::size_t{0}); }
+  std::size_t find(std::size_t x) {
+    while (parent[x] != x) {
+      parent[x] = parent[parent[x]];
+      x = parent[x];
+    }
+    return x;
+  }
+  void unite(std::size_t a, std::size_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+std::string MeshCleanReport::summary() const {
+  std::vector<std::string> parts;
+  if (welded_vertices > 0)
+    parts.push_back("welded " + plural(welded_vertices, "duplicate vertex", "duplicate vertices"));
+  if (unused_vertices > 0) parts.push_back("dropped " + plural(unused_vertices, "unused vertex", "unused vertices"));
+  if (degenerate_triangles > 0)
+    parts.push_back("dropped " + plural(degenerate_triangles, "degenerate triangle", "degenerate triangles"));
+  if (duplicate_triangles > 0)
+    parts.push_back("dropped " + plural(duplicate_triangles, "duplicate triangle", "duplicate triangles"));
+  if (opposite_pair_triangles > 0)
+    parts.push_back("dropped " + plural(opposite_pair_triangles, "triangle", "triangles") + " in " +
+                    plural(opposite_pair_triangles / 2, "opposite-winding pair", "opposite-winding pairs"));
+  if (stray_components > 0)
+    parts.push_back("dropped " + plural(stray_components, "stray component", "stray components") + " (" +
+                    plural(stray_component_triangles, "triangle", "triangles") + ")");
+  if (parts.empty()) return "clean";
+  std::string line = parts[0];
+  for (std::size_t i = 1; i < parts.size(); ++i) line += "; " + parts[i];
+  return line;
+}
+
+SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options, MeshCleanReport& report) {
+  report = MeshCleanReport{};
+  report.input_vertices = input.vertices.size();
+  report.input_triangles = input.triangles.size();
+
+  if (!std::isfinite(options.weld_tolerance) || options.weld_tolerance < 0.0)
+    throw std::invalid_argument("clean_mesh: weld_tolerance must be finite and >= 0");
+  if (!(options.min_component_fraction >= 0.0 && options.min_component_fraction <= 1.0))
+    throw std::invalid_argument("clean_mesh: min_component_fraction must be in [0, 1]");
+  for (std::size_t i = 0; i < input.vertices.size(); ++i) {
+    if (!is_finite(input.vertices[i]))
+      throw std::invalid_argument("clean_mesh: vertex " + std::to_string(i) + " is not finite");
+  }
+  for (std::size_t t = 0; t < input.triangles.size(); ++t) {
+    for (Index v : input.triangles[t]) {
+      if (v >= input.vertices.size())
+        throw std::invalid_argument("clean_mesh: triangle " + std::to_string(t) + " uses vertex index " +
+                                    std::to_string(v) + ", but the mesh has " + std::to_string(input.vertices.size()) +
+                                    " vertices");
+    }
+  }
+
+  // 1. Weld, in power-of-two scaled coordinates (exact; the tolerance is relative anyway).
+  const std::vector<Vec3> positions = unit_scaled_positions(input.vertices);
+  double scaled_diagonal = 0.0;
+  if (!positions.empty()) {
+    Vec3 lo = positions[0], hi = positions[0];
+    for (const Vec3& p : positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    scaled_diagonal = (hi - lo).norm();
+  }
+  // A tolerance of one diagonal already welds everything; capping first avoids overflow.
+  const double tolerance = std::min(options.weld_tolerance, 1.0) * scaled_diagonal;
+  const std::vector<Index> representative = weld_vertices(positions, tolerance);
+  for (std::size_t i = 0; i < representative.size(); ++i) {
+    if (representative[i] != i) ++report.welded_vertices;
+  }
+
+  // 2. Degenerate triangles: repeated index after welding, or zero area.
+  std::vector<Triangle> triangles(input.triangles.size());
+  std::vector<char> keep(input.triangles.size(), 1);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Triangle& original = input.triangles[t];
+    Triangle& welded = triangles[t];
+    for (int k = 0; k < 3; ++k) welded[k] = representative[original[k]];
+    const bool repeated = welded[0] == welded[1] || welded[1] == welded[2] || welded[0] == welded[2];
+    if (repeated || has_zero_area(positions[welded[0]], positions[welded[1]], positions[welded[2]])) {
+      keep[t] = 0;
+      ++report.degenerate_triangles;
+    }
+  }
+
+  // 3. Triangles on the same vertex set. Opposite windings cancel pairwise (a zero-thickness
+  // sheet has no inside); of the surplus winding the earliest copy stays, the rest are
+  // duplicates. Cancelling only pairs keeps a closed surface closed: on the Happy Buddha,
+  // dropping every triangle of a mixed-winding set instead opens 632 boundary edges.
+  {
+    std::vector<std::pair<Triangle, std::size_t>> by_set;
+    by_set.reserve(triangles.size());
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      if (keep[t]) by_set.emplace_back(vertex_set_and_winding(triangles[t]).first, t);
+    }
+    std::sort(by_set.begin(), by_set.end());
+    std::vector<std::size_t> even, odd;
+    for (std::size_t begin = 0; begin < by_set.size();) {
+      std::size_t end = begin + 1;
+      while (end < by_set.size() && by_set[end].first == by_set[begin].first) ++end;
+      if (end - begin > 1) {
+        even.clear();
+        odd.clear();
+        for (std::size_t g = begin; g < end; ++g) {
+          const std::size_t t = by_set[g].second;
+          (vertex_set_and_winding(triangles[t]).second ? even : odd).push_back(t);
+        }
+        const std::size_t pairs = std::min(even.size(), odd.size());
+        std::vector<std::size_t>& surplus = even.size() > odd.size() ? even : odd;
+        for (std::size_t t : even) keep[t] = 0;
+        for (std::size_t t : odd) keep[t] = 0;
+        if (surplus.size() > pairs) {
+          keep[surplus[0]] = 1;  // lists are in input order: this is the earliest copy
+          report.duplicate_triangles += surplus.size() - 1 - pairs;
+        }
+        report.opposite_pair_triangles += 2 * pairs;
+      }
+      begin = end;
+    }
+  }
+
+  // 4. Stray components: triangles connected through shared (welded) vertices.
+  {
+    UnionFind components(triangles.size());
+    std::vector<std::size_t> first_triangle_of_vertex(input.vertices.size(), std::numeric_limits<std::size_t>::max());
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      if (!keep[t]) continue;
+      for (Index v : triangles[t]) {
+        if (first_triangle_of_vertex[v] == std::numeric_limits<std::size_t>::max())
+          first_triangle_of_vertex[v] = t;
+        else
+          components.unite(first_triangle_of_vertex[v], t);
+      }
+    }
+    std::vector<std::size_t> size(triangles.size(), 0);
+    std::size_t largest = 0;
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      if (keep[t]) largest = std::max(largest, ++size[components.find(t)]);
+    }
+    const double min_size = options.min_component_fraction * static_cast<double>(largest);
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      if (keep[t] && components.find(t) == t && static_cast<double>(size[t]) < min_size) {
+        ++report.stray_components;
+        report.stray_component_triangles += size[t];
+      }
+    }
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      if (keep[t] && static_cast<double>(size[components.find(t)]) < min_size) keep[t] = 0;
+    }
+  }
+
+  // 5. Compact: used vertices and kept triangles, both in their original relative order.
+  std::vector<Index> new_index(input.vertices.size(), kNoIndex);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (keep[t]) {
+      for (Index v : triangles[t]) new_index[v] = 0;  // mark used
+    }
+  }
+  SurfaceMesh output;
+  for (std::size_t i = 0; i < input.vertices.size(); ++i) {
+    if (representative[i] != i) continue;  // welded away, counted above
+    if (new_index[i] == kNoIndex) {
+      ++report.unused_vertices;
+      continue;
+    }
+    new_index[i] = static_cast<Index>(output.vertices.size());
+    output.vertices.push_back(input.vertices[i]);
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    if (keep[t])
+      output.triangles.push_back({new_index[triangles[t][0]], new_index[triangles[t][1]], new_index[triangles[t][2]]});
+  }
+  report.output_vertices = output.vertices.size();
+  report.output_triangles = output.triangles.size();
+  if (output.triangles.empty())
+    throw std::invalid_argument("clean_mesh: no triangles remain (" + report.summary() + ")");
+  return output;
+}
+
+SurfaceMesh make_box_mesh(const Vec3& size) {
+  if (!is_finite(size) || size.minCoeff() <= 0.0)
+    throw std::invalid_argument("make_box_mesh: every edge length must be finite and > 0");
+  const Vec3 h = 0.5 * size;
+  SurfaceMesh mesh;
+  // Vertex i has x = +h when bit 0 is set, y when bit 1, z when bit 2.
+  for (int i = 0; i < 8; ++i)
+    mesh.vertices.emplace_back((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
+  mesh.triangles = {
+      {0, 4, 6}, {0, 6, 2},  // -x
+      {1, 3, 7}, {1, 7, 5},  // +x
+      {0, 1, 5}, {0, 5, 4},  // -y
+      {2, 6, 7}, {2, 7, 3},  // +y
+      {0, 2, 3}, {0, 3, 1},  // -z
+      {4, 5, 7}, {4, 7, 6},  // +z
+  };
+  return mesh;
+}
+
+SurfaceMesh make_sphere_mesh(double radius, int subdivisions) {
+  if (!std::isfinite(radius) || radius <= 0.0)
+    throw std::invalid_argument("make_sphere_mesh: radius must be finite and > 0");
+  if (subdivisions < 0 || subdivisions > 6)
+    throw std::invalid_argument("make_sphere_mesh: subdivisions must be in 0..6, got " + std::to_string(subdivisions));
+
+  // Icosahedron on the unit sphere; faces counter-clockwise seen from outside.
+  const double phi = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3> unit = {{-1, phi, 0},  {1, phi, 0},  {-1, -phi, 0}, {1, -phi, 0}, {0, -1, phi},  {0, 1, phi},
+                            {0, -1, -phi}, {0, 1, -phi}, {phi, 0, -1},  {phi, 0, 1},  {-phi, 0, -1}, {-phi, 0, 1}};
+  for (Vec3& p : unit) p.normalize();
+  std::vector<Triangle> faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<Index, Index>, Index> midpoint_of_edge;  // ordered: deterministic
+    auto midpoint = [&](Index a, Index b) {
+      const std::pair<Index, Index> key{std::min(a, b), std::max(a, b)};
+      auto [it, inserted] = midpoint_of_edge.try_emplace(key, static_cast<Index>(unit.size()));
+      if (inserted) unit.push_back((unit[a] + unit[b]).normalized());
+      return it->second;
+    };
+    std::vector<Triangle> finer;
+    finer.reserve(faces.size() * 4);
+    for (const Triangle& f : faces) {
+      const Index ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      finer.push_back({f[0], ab, ca});
+      finer.push_back({f[1], bc, ab});
+      finer.push_back({f[2], ca, bc});
+      finer.push_back({ab, bc, ca});
+    }
+    faces = std::move(finer);
+  }
+
+  SurfaceMesh mesh;
+  mesh.vertices.reserve(unit.size());
+  for (const Vec3& p : unit) mesh.vertices.push_back(radius * p);
+  mesh.triangles = std::move(faces);
+  return mesh;
+}
+
+std::pair<Vec3, Vec3> mesh_bounds(const SurfaceMesh& mesh) {
+  if (mesh.vertices.empty()) throw std::invalid_argument("mesh_bounds: the mesh has no vertices");
+  Vec3 lo = mesh.vertices[0], hi = mesh.vertices[0];
+  for (const Vec3& p : mesh.vertices) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return {lo, hi};
+}
+
+}  // namespace ffd

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs ffdsim's Debian packages when missing, then configures and builds into build/.
+# Usage: ./setup.sh [extra cmake -D options]      (FFDSIM_BUILD_DIR overrides build/)
+set -euo pipefail
+cd "$(dirname "$0")"
+packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libassimp-dev
+          libcli11-dev nlohmann-json3-dev catch2 libbenchmark-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+build_dir=${FFDSIM_BUILD_DIR:-build}
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
+cmake --build "$build_dir" -j2

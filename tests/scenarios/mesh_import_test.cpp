@@ -1,0 +1,266 @@
+#include "ffd/mesh_import.h"
+
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "ffd/mesh.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using ffd::Index;
+using ffd::SurfaceMesh;
+using ffd::Vec3;
+using Triangle = std::array<Index, 3>;
+
+// A fresh directory under the system temp dir, removed with everything in it.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "ffd_mesh_import_XXXXXX").string();
+    REQUIRE(mkdtemp(pattern.data()) != nullptr);
+    path = pattern;
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  std::string write(const std::string& name, const std::string& bytes) const {
+    const fs::path file = path / name;
+    std::ofstream out(file, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    REQUIRE(out.good());
+    return file.string();
+  }
+};
+
+template <typename T>
+void append_binary(std::string& bytes, T value) {
+  char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));  // little-endian host, as the formats want
+  bytes.append(raw, sizeof(T));
+}
+
+// The error must start with the path and say the problem.
+void check_import_error(const std::string& path, const std::string& problem) {
+  INFO("importing " << path);
+  try {
+    ffd::import_mesh(path);
+    FAIL("no MeshImportError");
+  } catch (const ffd::MeshImportError& error) {
+    const std::string message = error.what();
+    INFO("message: " << message);
+    CHECK(message.rfind(path + ": ", 0) == 0);
+    CHECK(message.find(problem) != std::string::npos);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("import_mesh reads the shipped teapot with the file's own indexing", "[mesh_import]") {
+  const std::string path = std::string(FFDSIM_SCENARIO_DIR) + "/meshes/teapot.obj";
+  const SurfaceMesh teapot = ffd::import_mesh(path);
+  CHECK(teapot.vertices.size() == 3644);
+  CHECK(teapot.triangles.size() == 6320);
+  // First `v` and `f` records of the file: "v -3.000000 1.800000 0.000000", "f 2909 2921 2939".
+  CHECK(teapot.vertices.front() == Vec3(-3.0, 1.8, 0.0));
+  CHECK(teapot.triangles.front() == Triangle{2908, 2920, 2938});
+  const auto [lo, hi] = ffd::mesh_bounds(teapot);
+  CHECK(lo.y() == Approx(0.0).margin(1e-9));
+  CHECK(hi.y() == Approx(3.15).margin(1e-6));
+
+  // The patch seams repeat 403 vertex positions; nothing else is wrong with the file.
+  ffd::MeshCleanReport report;
+  const SurfaceMesh cleaned = ffd::clean_mesh(teapot, ffd::MeshCleanOptions{}, report);
+  CHECK(report.welded_vertices == 403);
+  CHECK(report.unused_vertices == 0);
+  CHECK(report.degenerate_triangles == 0);
+  CHECK(report.duplicate_triangles == 0);
+  CHECK(report.opposite_pair_triangles == 0);
+  CHECK(report.stray_components == 0);  // lid, handle and spout are 12% of the body or more
+  CHECK(cleaned.vertices.size() == 3241);
+  CHECK(cleaned.triangles.size() == 6320);
+  CHECK(report.summary() == "welded 403 duplicate vertices");
+}
+
+TEST_CASE("import_mesh reads OBJ polygons, relative indices and unused vertices", "[mesh_import]") {
+  TempDir dir;
+  const std::string path = dir.write("square.obj",
+                                     "# a unit square as one quad, plus one unused vertex\n"
+                                     "o square\n"
+                                     "v 0 0 0\n"
+                                     "v 1 0 0\n"
+                                     "v 1 1 0\n"
+                                     "v 0 1 0\n"
+                                     "v 5 5 5\n"
+                                     "vn 0 0 1\n"
+                                     "f 1//1 2//1 -3//1 4//1\n"
+                                     "v 0 0 0\n"  // a second vertex at the origin: kept, not joined
+                                     "f -1 3 4\n");
+  const SurfaceMesh mesh = ffd::import_mesh(path);
+  REQUIRE(mesh.vertices.size() == 6);
+  CHECK(mesh.vertices[4] == Vec3(5, 5, 5));
+  CHECK(mesh.vertices[5] == Vec3(0, 0, 0));
+  REQUIRE(mesh.triangles.size() == 3);
+  CHECK(mesh.triangles[0] == Triangle{0, 1, 2});
+  CHECK(mesh.triangles[1] == Triangle{0, 2, 3});
+  CHECK(mesh.triangles[2] == Triangle{5, 2, 3});
+
+  ffd::MeshCleanReport report;
+  ffd::clean_mesh(mesh, ffd::MeshCleanOptions{}, report);
+  CHECK(report.welded_vertices == 1);
+  CHECK(report.unused_vertices == 1);
+  CHECK(report.duplicate_triangles == 1);  // {5, 2, 3} is {0, 2, 3} after welding
+}
+
+TEST_CASE("import_mesh reads ASCII and binary PLY with the file's vertex list", "[mesh_import]") {
+  TempDir dir;
+  SECTION("ASCII") {
+    const std::string path = dir.write("square.ply",
+                                       "ply\n"
+                                       "format ascii 1.0\n"
+                                       "element vertex 5\n"
+                                       "property float x\n"
+                                       "property float y\n"
+                                       "property float z\n"
+                                       "element face 1\n"
+                                       "property list uchar int vertex_indices\n"
+                                       "end_header\n"
+                                       "9 9 9\n"
+                                       "0 0 0\n"
+                                       "1 0 0\n"
+                                       "1 1 0\n"
+                                       "0 1 0\n"
+                                       "4 1 2 3 4\n");
+    const SurfaceMesh mesh = ffd::import_mesh(path);
+    REQUIRE(mesh.vertices.size() == 5);  // the unused first vertex stays
+    CHECK(mesh.vertices[0] == Vec3(9, 9, 9));
+    CHECK(mesh.vertices[3] == Vec3(1, 1, 0));
+    REQUIRE(mesh.triangles.size() == 2);
+    for (const Triangle& t : mesh.triangles) {
+      for (Index v : t) CHECK(v >= 1);
+      // Both halves face +z like the quad.
+      const Vec3 normal = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+      CHECK(normal.z() > 0.0);
+    }
+  }
+  SECTION("binary little-endian") {
+    std::string bytes =
+        "ply\n"
+        "format binary_little_endian 1.0\n"
+        "element vertex 4\n"
+        "property float x\n"
+        "property float y\n"
+        "property float z\n"
+        "element face 2\n"
+        "property list uchar int vertex_indices\n"
+        "end_header\n";
+    for (const float coordinate : {0.f, 0.f, 0.f, 2.f, 0.f, 0.f, 0.f, 2.f, 0.f, 0.f, 0.f, 2.f})
+      append_binary(bytes, coordinate);
+    for (const auto& face : {Triangle{0, 2, 1}, Triangle{0, 1, 3}}) {
+      append_binary(bytes, std::uint8_t{3});
+      for (Index v : face) append_binary(bytes, static_cast<std::int32_t>(v));
+    }
+    const SurfaceMesh mesh = ffd::import_mesh(dir.write("binary.ply", bytes));
+    REQUIRE(mesh.vertices.size() == 4);
+    CHECK(mesh.vertices[3] == Vec3(0, 0, 2));
+    REQUIRE(mesh.triangles.size() == 2);
+    CHECK(mesh.triangles[0] == Triangle{0, 2, 1});
+    CHECK(mesh.triangles[1] == Triangle{0, 1, 3});
+  }
+}
+
+TEST_CASE("import_mesh reads ASCII and binary STL", "[mesh_import]") {
+  TempDir dir;
+  // STL stores each facet's corners separately: 2 facets are 6 vertices, 4 after welding.
+  auto check_square = [](const SurfaceMesh& mesh) {
+    CHECK(mesh.vertices.size() == 6);
+    REQUIRE(mesh.triangles.size() == 2);
+    ffd::MeshCleanReport report;
+    const SurfaceMesh cleaned = ffd::clean_mesh(mesh, ffd::MeshCleanOptions{}, report);
+    CHECK(report.welded_vertices == 2);
+    CHECK(cleaned.vertices.size() == 4);
+    for (const Triangle& t : cleaned.triangles) {
+      const Vec3 normal =
+          (cleaned.vertices[t[1]] - cleaned.vertices[t[0]]).cross(cleaned.vertices[t[2]] - cleaned.vertices[t[0]]);
+      CHECK(normal.z() == Approx(1.0));
+    }
+  };
+  SECTION("ASCII") {
+    const std::string path = dir.write("square.stl",
+                                       "solid square\n"
+                                       "  facet normal 0 0 1\n"
+                                       "    outer loop\n"
+                                       "      vertex 0 0 0\n"
+                                       "      vertex 1 0 0\n"
+                                       "      vertex 1 1 0\n"
+                                       "    endloop\n"
+                                       "  endfacet\n"
+                                       "  facet normal 0 0 1\n"
+                                       "    outer loop\n"
+                                       "      vertex 0 0 0\n"
+                                       "      vertex 1 1 0\n"
+                                       "      vertex 0 1 0\n"
+                                       "    endloop\n"
+                                       "  endfacet\n"
+                                       "endsolid square\n");
+    check_square(ffd::import_mesh(path));
+  }
+  SECTION("binary") {
+    std::string bytes(80, ' ');  // header; must not start with "solid"
+    bytes.replace(0, 10, "binary stl");
+    append_binary(bytes, std::uint32_t{2});
+    const float facets[2][4][3] = {{{0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}},
+                                   {{0, 0, 1}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}}};  // normal, 3 corners
+    for (const auto& facet : facets) {
+      for (const auto& row : facet)
+        for (const float value : row) append_binary(bytes, value);
+      append_binary(bytes, std::uint16_t{0});  // attribute byte count
+    }
+    check_square(ffd::import_mesh(dir.write("square_binary.stl", bytes)));
+  }
+}
+
+TEST_CASE("import_mesh reports unreadable files with the path and the reason", "[mesh_import]") {
+  TempDir dir;
+  SECTION("missing file") { check_import_error((dir.path / "missing.obj").string(), "file not found"); }
+  SECTION("a directory") { check_import_error(dir.path.string(), "not a regular file"); }
+  SECTION("garbage PLY: assimp's own message is passed on") {
+    const std::string path = dir.write("garbage.ply", std::string("\x01\x02 this is not a mesh \xff\xfe", 24));
+    check_import_error(path, "cannot read the mesh: ");
+    check_import_error(path, "magic number");
+  }
+  SECTION("garbage STL") { check_import_error(dir.write("garbage.stl", "not an stl file"), "cannot read the mesh: "); }
+  SECTION("unknown format") { check_import_error(dir.write("mesh.txt", "hello\n"), "cannot read the mesh: "); }
+  SECTION("text that is not OBJ") {
+    check_import_error(dir.write("text.obj", "hello world\nthis is not a mesh\n"), "no triangles");
+  }
+  SECTION("an OBJ with only lines") {
+    check_import_error(dir.write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"), "no triangles");
+  }
+  SECTION("a PLY with only points") {
+    check_import_error(dir.write("points.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"),
+                       "cannot read the mesh: ");
+  }
+  SECTION("an OBJ face index out of range") {
+    check_import_error(dir.write("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "vertex index out of range");
+  }
+  SECTION("a PLY face index out of range, which assimp accepts") {
+    check_import_error(dir.write("bad_index.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                 "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
+                       "refers to vertex 7 of a mesh with 3 vertices");
+  }
+}

@@ -1,0 +1,24 @@
+#pragma once
+// The JSON run report of `ffdsim simulate` (format in README.md, "Run report").
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "ffd/measure.h"
+#include "ffd/step_statistics.h"
+
+namespace ffdsim {
+
+struct RunSummary {
+  std::string scene;
+  std::uint64_t steps = 0;
+  double dt = 0.0;
+  std::uint64_t state_hash = 0;
+  bool finite = true;
+  ffd::SurfaceContactReport contacts;
+  ffd::Energy energy;
+};
+
+nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const ffd::StepStatistics& stats);
+std::string hex64(std::uint64_t value);
+
+}  // namespace ffdsim
