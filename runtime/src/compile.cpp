@@ -24,7 +24,7 @@ void require(bool ok, const std::string& where, const std::string& what) {
 void validate(const SceneSpec& spec) {
   const SimulationSettings& s = spec.settings;
   require(std::isfinite(s.dt) && s.dt > 0.0 && s.dt <= 0.01, "simulation.dt", "must be in (0, 0.01] s (got " + fmt(s.dt) + ")");
-  require(s.gravity.allFinite(), "simulation.gravity", "must be finite");
+  require(is_finite(s.gravity), "simulation.gravity", "must be finite");
   require(s.alpha >= 0.0 && s.alpha <= 1.0, "simulation.alpha", "must be in [0, 1] (got " + fmt(s.alpha) + ")");
   require(s.beta >= 0.0 && s.beta <= 1.0, "simulation.beta", "must be in [0, 1] (got " + fmt(s.beta) + ")");
   require(s.hash_table_size >= 1, "simulation.hash_table_size", "must be >= 1");
@@ -35,7 +35,7 @@ void validate(const SceneSpec& spec) {
     const std::string w = "object '" + o.name + "'";
     require(std::isfinite(o.cell_size) && o.cell_size > 0.0, w + ".cell_size", "must be > 0 m (got " + fmt(o.cell_size) + ")");
     require(std::isfinite(o.mass) && o.mass > 0.0, w + ".mass", "must be > 0 kg (got " + fmt(o.mass) + ")");
-    require(o.position.allFinite() && o.rotation_deg.allFinite() && o.velocity.allFinite(), w, "position, rotation and velocity must be finite");
+    require(is_finite(o.position) && is_finite(o.rotation_deg) && is_finite(o.velocity), w, "position, rotation and velocity must be finite");
     require(!o.mesh.triangles.empty(), w + ".mesh", "has no triangles");
     if (o.dynamics == DynamicsKind::MassSpring) {
       require(std::isfinite(o.mass_spring.stiffness) && o.mass_spring.stiffness > 0.0, w + ".mass_spring.stiffness", "must be > 0 N/m");
@@ -49,7 +49,7 @@ void validate(const SceneSpec& spec) {
     for (std::size_t j = 0; j < i; ++j) require(spec.objects[j].name != o.name, w, "name used twice");
   }
   for (const PlaneSpec& p : spec.planes) {
-    require(p.normal.allFinite() && p.normal.norm() > 1e-12, "plane '" + p.name + "'.normal", "must be a non-zero vector");
+    require(is_finite(p.normal) && p.normal.norm() > 1e-12, "plane '" + p.name + "'.normal", "must be a non-zero vector");
     require(std::isfinite(p.offset), "plane '" + p.name + "'.offset", "must be finite");
   }
   require(spec.planes.empty() || has(s.effects, Effect::Planes), "simulation.effects",

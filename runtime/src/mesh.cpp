@@ -17,9 +17,6 @@ namespace {
 
 using Triangle = std::array<Index, 3>;
 
-// Per component: Eigen's allFinite() computes inf - inf, which raises FE_INVALID.
-bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
-
 std::string plural(std::size_t count, const char* singular, const char* plural_form) {
   return std::to_string(count) + " " + (count == 1 ? singular : plural_form);
 }

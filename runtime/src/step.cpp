@@ -25,7 +25,7 @@ void apply_gravity(const Model& model, State& state) {
 
 bool all_finite(const State& state) {
   for (std::size_t n = 0; n < state.x.size(); ++n)
-    if (!state.x[n].allFinite() || !state.v[n].allFinite()) return false;
+    if (!is_finite(state.x[n]) || !is_finite(state.v[n])) return false;
   return true;
 }
 

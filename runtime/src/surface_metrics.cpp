@@ -15,9 +15,6 @@ namespace {
 
 using Triangle = std::array<Index, 3>;
 
-// Per component: Eigen's allFinite() computes inf - inf, which raises FE_INVALID.
-bool is_finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
-
 // Closest feature of a triangle, in the order of Ericson's Voronoi-region tests.
 enum class Feature { kVertexA, kVertexB, kVertexC, kEdgeAB, kEdgeBC, kEdgeCA, kFace };
 
