@@ -2,6 +2,7 @@
 // surfaces in close contact, and runs bit-identically twice. Effects on demand: a stage
 // the scene does not ask for does no work.
 #include <catch2/catch.hpp>
+#include <set>
 
 #include "ffd/measure.h"
 #include "ffd/scene_loader.h"
@@ -46,7 +47,7 @@ const Model& default_model() {
 }
 
 const Run& default_run() {
-  static const Run run = run_scene(default_model(), 5000);
+  static const Run run = run_scene(default_model(), 3000);
   return run;
 }
 
@@ -57,10 +58,10 @@ TEST_CASE("the default scene settles finite, with bounded energy", "[scene][defa
   const Run& run = default_run();
   REQUIRE(run.finite);
   // No blow-up. Eq. 9 corrections against stiff springs store elastic energy at impacts
-  // (measured peak: 2.7x the initial energy), so the bound is on runaway, not conservation.
+  // (measured peak: 2.75x the initial energy), so the bound is on runaway, not conservation.
   CHECK(run.max_energy < 4.0 * run.initial_energy);
-  // At rest after 5 s: 2 kg of teapots with under 5 mJ of kinetic energy.
-  CHECK(compute_energy(model, run.state).kinetic < 5e-3);
+  // At rest after 3 s: 2 kg of teapots with under 1 mJ of kinetic energy (measured 0.03 mJ).
+  CHECK(compute_energy(model, run.state).kinetic < 1e-3);
   CHECK(run.narrow_totals.inter_contacts > 0);
 }
 
@@ -70,16 +71,18 @@ TEST_CASE("the default scene rests in close surface contact", "[scene][default_s
   REQUIRE(run.finite);
   const SurfaceContactReport contacts = measure_surface_contacts(model, run.state);
   const double cell = model.objects[0].cell_size;
-  int floor_contacts = 0;
+  std::set<std::string> pairs;
   for (const SurfaceContact& c : contacts.contacts) {
     INFO(c.a << " / " << c.b << ": penetration " << c.penetration_m << " m, gap " << c.gap_m << " m");
-    // Stated bounds: penetration under a quarter of a cell (4 mm), and no visible gap: under
-    // a tenth of a cell (1.6 mm on a 32 cm teapot; measured 0.19 mm).
+    // Stated bounds: penetration under a quarter of a cell (4 mm; measured 1.8 mm where the
+    // lower lid's knob carries the upper teapot), and no visible gap: under a tenth of a cell
+    // (1.6 mm on a 32 cm teapot; measured 0.3 mm).
     CHECK(c.penetration_m < 0.25 * cell);
     CHECK(c.gap_m < 0.1 * cell);
-    if (c.b == "floor") ++floor_contacts;
+    pairs.insert(c.a + "/" + c.b);
   }
-  CHECK(floor_contacts == 2);  // both teapots end on the floor
+  // Stacked: the lower teapot on the floor, the upper one on the lower one only.
+  CHECK(pairs == std::set<std::string>{"teapot_low/floor", "teapot_low/teapot_high"});
 }
 
 TEST_CASE("the default scene runs bit-identically twice, and from a restored state", "[scene][determinism]") {

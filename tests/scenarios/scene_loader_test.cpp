@@ -64,7 +64,7 @@ TEST_CASE("the default scene is two teapots above a floor with every effect", "[
   CHECK(scene.settings.dt == 0.001);
   CHECK(scene.settings.gravity == ffd::Vec3(0.0, -9.81, 0.0));
   CHECK(scene.settings.alpha == 1.0);
-  CHECK(scene.settings.beta == 0.3);
+  CHECK(scene.settings.beta == 1.0);
   CHECK(scene.settings.seed == 1);
 
   REQUIRE(scene.planes.size() == 1);

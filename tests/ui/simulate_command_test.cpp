@@ -1,0 +1,113 @@
+// `ffdsim simulate` end to end: the report it writes, and how it fails on bad input.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+Result run_ffdsim(const std::string& arguments) {
+  Result r;
+  const std::string command = std::string(FFDSIM_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::filesystem::path temp_dir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("ffdsim_test_" + name);
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+const std::string kScenes = std::string(FFDSIM_SCENARIO_DIR) + "/scenes/";
+
+}  // namespace
+
+TEST_CASE("simulate writes a report with the documented fields", "[cli]") {
+  const std::filesystem::path dir = temp_dir("report");
+  const std::string report = (dir / "nested" / "report.json").string();
+  const Result r = run_ffdsim("simulate " + kScenes + "shape_matching_pair.toml --steps 200 --report " + report +
+                              " --obj-every 100 --out " + (dir / "frames").string());
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  std::ifstream in(report);
+  REQUIRE(in);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  CHECK(j.at("steps") == 200);
+  CHECK(j.at("finite") == true);
+  CHECK(j.at("state_hash").get<std::string>().size() == 16);
+  CHECK(j.at("max_penetration_m").is_number());
+  CHECK(j.at("max_gap_m").is_number());
+  CHECK(j.at("energy").at("total_j").is_number());
+  CHECK(j.at("stages").contains("dynamics"));
+  CHECK(j.at("stages").contains("narrow_phase"));
+  CHECK_FALSE(j.at("stages").at("narrow_phase").at("counters").contains("self_pairs_tested"));  // no self_collision
+  for (const auto& [name, stage] : j.at("stages").items()) {
+    INFO(name);
+    CHECK(stage.at("p50_us").get<double>() <= stage.at("p99_us").get<double>());
+    CHECK(stage.at("p99_us").get<double>() <= stage.at("max_us").get<double>());
+  }
+  // Frames at steps 0, 100 and 200 for each of the two objects.
+  int frames = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "frames")) frames += entry.path().extension() == ".obj";
+  CHECK(frames == 6);
+  // The same run again prints the same state hash.
+  const Result again = run_ffdsim("simulate " + kScenes + "shape_matching_pair.toml --steps 200 --quiet --report " +
+                                  (dir / "again.json").string());
+  REQUIRE(again.exit_code == 0);
+  std::ifstream in2(dir / "again.json");
+  CHECK(nlohmann::json::parse(in2).at("state_hash") == j.at("state_hash"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("simulate fails clearly on bad input", "[cli]") {
+  SECTION("a scene with an out-of-range value names file, line and field") {
+    const std::filesystem::path dir = temp_dir("bad_scene");
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "bad.toml") << "[simulation]\neffects = []\n\n[[object]]\nname = \"b\"\nshape = \"box\"\n"
+                                       "size = [0.1, 0.1, 0.1]\ncell_size = -0.02\n[object.mass_spring]\n";
+    const Result r = run_ffdsim("simulate " + (dir / "bad.toml").string());
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.output, Catch::Contains("bad.toml:8:") && Catch::Contains("cell_size") && Catch::Contains("-0.02"));
+    std::filesystem::remove_all(dir);
+  }
+  SECTION("a missing scene file") {
+    const Result r = run_ffdsim("simulate /nonexistent/scene.toml");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("/nonexistent/scene.toml"));
+  }
+  SECTION("a bad step count") {
+    const Result r = run_ffdsim("simulate --steps 0");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("--steps"));
+  }
+  SECTION("--obj-every without --out") {
+    const Result r = run_ffdsim("simulate --obj-every 10");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("--out"));
+  }
+  SECTION("no subcommand") {
+    CHECK(run_ffdsim("").exit_code != 0);
+  }
+}
+
+TEST_CASE("--help works for the program and the command", "[cli]") {
+  const Result top = run_ffdsim("--help");
+  CHECK(top.exit_code == 0);
+  CHECK_THAT(top.output, Catch::Contains("simulate"));
+  const Result sub = run_ffdsim("simulate --help");
+  CHECK(sub.exit_code == 0);
+  CHECK_THAT(sub.output, Catch::Contains("--obj-every"));
+}
