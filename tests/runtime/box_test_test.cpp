@@ -127,3 +127,22 @@ TEST_CASE("node-in-box rejects NaN nodes", "[narrow_phase]") {
   b[7].x() = std::nan("");
   CHECK(box_planes(b).degenerate);
 }
+
+TEST_CASE("a node moving into a thin box takes the face it came through", "[narrow_phase]") {
+  // A thin box 1 x 0.1 x 1 (a flat piece of shell); a node just entered through the bottom
+  // face, 0.02 from it, but only 0.01 from the -x side face.
+  const BoxPlanes p = box_planes(unit_box(Vec3::Zero(), Vec3(1.0, 0.1, 1.0)));
+  const Vec3 node(0.01, 0.02, 0.5);
+  const NodeInBox still = node_in_box(p, node);
+  REQUIRE(still.inside);
+  CHECK(still.face == 0);  // eq. 7 alone: the side face, which would push the node sideways
+  const double dt = 0.001;
+  const NodeInBox moving = node_in_box(p, node, Vec3(0.0, 25.0, 0.0), 2 * dt);  // up at 25 m/s
+  REQUIRE(moving.inside);
+  CHECK(moving.face == 2);  // -y: the face it entered through
+  CHECK(moving.depth == Approx(0.02));
+  // Slow approach: the entry is too old to say anything, eq. 7 decides.
+  CHECK(node_in_box(p, node, Vec3(0.0, 0.5, 0.0), 2 * dt).face == 0);
+  // At rest relative to the box: eq. 7.
+  CHECK(node_in_box(p, node, Vec3::Zero(), 2 * dt).face == 0);
+}
