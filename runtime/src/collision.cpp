@@ -25,12 +25,6 @@ std::int64_t hash_grid_coordinate(double x, double inv_cell) {
   return static_cast<std::int64_t>(g);
 }
 
-namespace {
-
-// How far back (in steps) a node's way into a box is trusted to pick the contact face.
-constexpr double kRecentEntrySteps = 2.0;
-
-// Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
 void invalidate_around(const Model& model, Scratch& scratch, Index cell) {
   for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
     const Index b = model.cell_box[model.cell_neighbours[i]];
@@ -49,6 +43,11 @@ Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes) {
   for (Index n : nodes) v += state.v[n];
   return v * 0.125;
 }
+
+namespace {
+
+// How far back (in steps) a node's way into a box is trusted to pick the contact face.
+constexpr double kRecentEntrySteps = 2.0;
 
 // Section 7 for a node of cell B found inside the box of cell A: n is A's outward normal of
 // least penetration, r the depth (eq. 7).
@@ -89,6 +88,8 @@ void test_nodes(const Model& model, State& state, Scratch& scratch, Index mover,
     if (self) ++counters.self_contacts;
     else ++counters.inter_contacts;
     max_depth = std::max(max_depth, hit.depth);
+    scratch.record_contact(scratch.box_nodes[mover][k], planes.normal[hit.face], hit.depth,
+                           self ? ContactKind::Self : ContactKind::Inter);
     respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth);
     // Update both boxes at once so the remaining tests see the corrected state.
     invalidate_around(model, scratch, cell_a);
@@ -219,6 +220,12 @@ void collide_planes(const Model& model, State& state, Scratch& scratch, StageCou
       const double r = -deepest;
       ++counters.plane_contacts;
       max_depth = std::max(max_depth, r);
+      for (const Vec3& p : scratch.box_nodes[b]) {
+        if (plane.normal.dot(p) - plane.offset == deepest) {
+          scratch.record_contact(p, plane.normal, r, ContactKind::Plane);
+          break;
+        }
+      }
       const Index cell = model.box_cell[b];
       const std::array<Index, 8>& nodes = model.cell_nodes[cell];
       if (mean_velocity(state, nodes).dot(plane.normal) < 0.0) {

@@ -9,6 +9,15 @@ namespace ffd {
 // Eq. 2 for the 9 nodes of box b from its cell's 8 lattice nodes; marks it valid.
 void update_box(const Model& model, const State& state, Scratch& scratch, Index b);
 
+// Box b recomputed if a response made it stale (counted in `counters`).
+void ensure_box(const Model& model, const State& state, Scratch& scratch, Index b, StageCounters& counters);
+
+// Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
+void invalidate_around(const Model& model, Scratch& scratch, Index cell);
+
+// Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
+Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
+
 // Teschner et al. 2003: hash of integer grid coordinates (two's complement wrap for
 // negative ones) into `table_size` buckets.
 inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Index table_size) {

@@ -52,6 +52,14 @@ void validate(const SceneSpec& spec) {
     require(is_finite(p.normal) && p.normal.norm() > 1e-12, "plane '" + p.name + "'.normal", "must be a non-zero vector");
     require(std::isfinite(p.offset), "plane '" + p.name + "'.offset", "must be finite");
   }
+  const ProbeSettings& probe = s.probe;
+  require(std::isfinite(probe.radius) && probe.radius > 0.0, "probe.radius", "must be > 0 m");
+  require(std::isfinite(probe.mass) && probe.mass > 0.0, "probe.mass", "must be > 0 kg");
+  require(std::isfinite(probe.coupling_stiffness) && probe.coupling_stiffness >= 0.0, "probe.coupling_stiffness", "must be >= 0 N/m");
+  require(std::isfinite(probe.coupling_damping) && probe.coupling_damping >= 0.0, "probe.coupling_damping", "must be >= 0 N*s/m");
+  require(is_finite(probe.start), "probe.start", "must be finite");
+  require(std::isfinite(s.grab.stiffness) && s.grab.stiffness >= 0.0, "grab.stiffness", "must be >= 0 N/m");
+  require(std::isfinite(s.grab.damping) && s.grab.damping >= 0.0, "grab.damping", "must be >= 0 N*s/m");
   require(spec.planes.empty() || has(s.effects, Effect::Planes), "simulation.effects",
           "the scene declares planes but does not list the \"planes\" effect");
 }
@@ -205,7 +213,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
       std::sort(pairs.begin(), pairs.end());
       pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
       for (const auto& [a, b] : order_springs_by_colour(pairs, model.node_rest.size()))
-        model.springs.push_back({a, b, (model.node_rest[a] - model.node_rest[b]).norm(), 0.0});
+        model.springs.push_back({a, b, (model.node_rest[a] - model.node_rest[b]).norm()});
     }
     obj.spring_end = static_cast<Index>(model.springs.size());
 
@@ -261,15 +269,6 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
 
   model.node_inv_mass.resize(model.node_mass.size());
   for (std::size_t n = 0; n < model.node_mass.size(); ++n) model.node_inv_mass[n] = 1.0 / model.node_mass[n];
-  // XPBD (Macklin et al. 2016): alpha~ = compliance / dt^2, gamma = compliance * damping / dt.
-  for (const ObjectModel& o : model.objects) {
-    const double dt = spec.settings.dt, compliance = 1.0 / o.mass_spring.stiffness;
-    const double alpha_tilde = compliance / (dt * dt), gamma = compliance * o.mass_spring.damping / dt;
-    for (Index s = o.spring_begin; s < o.spring_end; ++s) {
-      Spring& sp = model.springs[s];
-      sp.inv_denominator = 1.0 / ((1.0 + gamma) * (model.node_inv_mass[sp.a] + model.node_inv_mass[sp.b]) + alpha_tilde);
-    }
-  }
   model.node_region_count.assign(model.node_rest.size(), 0);
   for (Index m : model.region_members) ++model.node_region_count[m];
 
@@ -300,7 +299,8 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   const bool planes = has(effects, Effect::Planes) && !model.planes.empty();
   if (has(effects, Effect::Gravity)) model.pipeline.push_back(Stage::Gravity);
   model.pipeline.push_back(Stage::Dynamics);
-  if (box_box || planes) model.pipeline.push_back(Stage::BoxUpdate);
+  const bool probe = has(effects, Effect::Probe);
+  if (box_box || planes || probe) model.pipeline.push_back(Stage::BoxUpdate);
   if (box_box) {
     model.pipeline.push_back(Stage::BroadPhase);
     model.pipeline.push_back(Stage::NarrowPhase);
@@ -311,6 +311,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     model.hash_cell_size = spec.settings.hash_cell_size > 0.0 ? spec.settings.hash_cell_size : largest_cell;
   }
   if (planes) model.pipeline.push_back(Stage::Planes);
+  if (probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::Interaction);
   return model;
 }
 
@@ -319,6 +320,13 @@ State initial_state(const Model& model) {
   state.params.gravity = model.settings.gravity;
   state.params.alpha = model.settings.alpha;
   state.params.beta = model.settings.beta;
+  state.params.stiffness.resize(model.objects.size());
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& o = model.objects[i];
+    state.params.stiffness[i] =
+        o.dynamics == DynamicsKind::MassSpring ? o.mass_spring.stiffness : o.shape_matching.stiffness;
+  }
+  state.probe.device = state.probe.device_previous = state.probe.x = model.settings.probe.start;
   state.x.resize(model.node_count());
   state.v.resize(model.node_count());
   for (const ObjectModel& o : model.objects) {

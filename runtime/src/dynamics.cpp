@@ -21,14 +21,16 @@ namespace {
 
 // XPBD (Macklin et al. 2016) on distance constraints with compliance 1/k and Rayleigh-like
 // constraint damping: implicit in effect, so stable for every stiffness at the fixed dt.
-void integrate_mass_spring(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+// The stiffness is the object's live value in State::params, so it can be tuned between steps.
+void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
+                           Scratch& scratch) {
   const double dt = model.settings.dt;
   const MassSpringParams& p = obj.mass_spring;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     scratch.x_prev[n] = state.x[n];
     state.x[n] += dt * state.v[n];  // prediction
   }
-  const double compliance = 1.0 / p.stiffness;          // m/N
+  const double compliance = 1.0 / stiffness;            // m/N
   const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
   const double gamma = compliance * p.damping / dt;     // XPBD damping term
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
@@ -44,7 +46,8 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, State& st
       const double wa = model.node_inv_mass[spring.a], wb = model.node_inv_mass[spring.b];
       const double C = len - spring.rest_length;
       const double damping_term = gamma * grad.dot((xa - scratch.x_prev[spring.a]) - (xb - scratch.x_prev[spring.b]));
-      const double dlambda = (-C - alpha_tilde * scratch.lambda[s] - damping_term) * spring.inv_denominator;
+      const double denominator = (1.0 + gamma) * (wa + wb) + alpha_tilde;
+      const double dlambda = (-C - alpha_tilde * scratch.lambda[s] - damping_term) / denominator;
       scratch.lambda[s] += dlambda;
       xa += (wa * dlambda) * grad;
       xb -= (wb * dlambda) * grad;
@@ -57,7 +60,8 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, State& st
 // Lattice shape matching (Rivers & James 2007, FastLSM, with Mueller et al. 2005
 // integration): each region's best rigid fit of its rest shape gives goal positions; a node
 // is pulled towards the mean of its regions' goals by a fraction `stiffness` per step.
-void integrate_shape_matching(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+void integrate_shape_matching(const Model& model, const ObjectModel& obj, double stiffness, State& state,
+                              Scratch& scratch) {
   const double dt = model.settings.dt;
   const ShapeMatchingParams& p = obj.shape_matching;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) scratch.goal_sum[n] = Vec3::Zero();
@@ -81,7 +85,7 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, State&
       scratch.goal_sum[n] += R * (model.node_rest[n] - region.rest_centroid) + c;
     }
   }
-  const double pull = p.stiffness / dt;
+  const double pull = stiffness / dt;
   const double keep = std::max(0.0, 1.0 - p.damping * dt);
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     const Vec3 goal = scratch.goal_sum[n] / static_cast<double>(model.node_region_count[n]);
@@ -93,9 +97,11 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, State&
 }  // namespace
 
 void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
-  for (const ObjectModel& obj : model.objects) {
-    if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, state, scratch);
-    else integrate_shape_matching(model, obj, state, scratch);
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& obj = model.objects[i];
+    const double stiffness = state.params.stiffness[i];
+    if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, scratch);
+    else integrate_shape_matching(model, obj, stiffness, state, scratch);
   }
 }
 

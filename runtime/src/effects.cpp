@@ -12,6 +12,8 @@ const char* effect_name(Effect e) {
     case Effect::InterCollision: return "inter_collision";
     case Effect::SelfCollision: return "self_collision";
     case Effect::Friction: return "friction";
+    case Effect::Probe: return "probe";
+    case Effect::Grab: return "grab";
   }
   return "?";
 }
@@ -34,6 +36,7 @@ const char* stage_name(Stage s) {
     case Stage::BroadPhase: return "broad_phase";
     case Stage::NarrowPhase: return "narrow_phase";
     case Stage::Planes: return "planes";
+    case Stage::Interaction: return "interaction";
     case Stage::Count: break;
   }
   return "?";

@@ -14,12 +14,14 @@ Energy compute_energy(const Model& model, const State& state) {
     e.kinetic += 0.5 * model.node_mass[n] * state.v[n].squaredNorm();
     e.gravitational -= model.node_mass[n] * g.dot(state.x[n]);
   }
-  for (const ObjectModel& o : model.objects) {
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& o = model.objects[i];
     if (o.dynamics != DynamicsKind::MassSpring) continue;
+    const double stiffness = state.params.stiffness[i];
     for (Index s = o.spring_begin; s < o.spring_end; ++s) {
       const Spring& sp = model.springs[s];
       const double stretch = (state.x[sp.a] - state.x[sp.b]).norm() - sp.rest_length;
-      e.elastic += 0.5 * o.mass_spring.stiffness * stretch * stretch;
+      e.elastic += 0.5 * stiffness * stretch * stretch;
     }
   }
   return e;

@@ -8,6 +8,7 @@
 
 #include "dynamics.h"
 #include "collision.h"
+#include "interaction.h"
 
 namespace ffd {
 
@@ -48,6 +49,7 @@ Scratch make_scratch(const Model& model) {
   s.x_prev.resize(model.node_count());
   s.lambda.resize(model.springs.size());
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
+  s.contacts.resize(kContactCapacity);
   return s;
 }
 
@@ -73,6 +75,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   report.stage_ns.fill(-1);
   const std::int64_t start = now_ns();
   const bool friction = has(model.settings.effects, Effect::Friction);
+  scratch.contact_count = 0;
+  scratch.contacts_dropped = 0;
   for (Stage stage : model.pipeline) {
     const std::int64_t t0 = now_ns();
     StageCounters& counters = report.counters[static_cast<std::size_t>(stage)];
@@ -92,11 +96,14 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         if (friction) collide_planes<true>(model, state, scratch, counters, report.max_box_penetration_m);
         else collide_planes<false>(model, state, scratch, counters, report.max_box_penetration_m);
         break;
+      case Stage::Interaction: interact(model, state, scratch, counters, report.max_box_penetration_m); break;
       case Stage::Count: break;
     }
     report.stage_ns[static_cast<std::size_t>(stage)] = now_ns() - t0;
   }
-  report.finite = all_finite(state);
+  report.finite = all_finite(state) && is_finite(state.probe.x) && is_finite(state.probe.v);
+  report.contacts_recorded = scratch.contact_count;
+  report.contacts_dropped = scratch.contacts_dropped;
   ++state.step;
   report.total_ns = now_ns() - start;
 }

@@ -284,7 +284,10 @@ class TableReader {
   std::vector<std::string_view> known_keys_;
 };
 
-const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object"};
+const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object", "probe", "grab"};
+const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_stiffness", "coupling_damping",
+                                                  "start"};
+const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
     "effects", "hash_table_size", "hash_cell_size", "min_box_thickness"};
@@ -326,6 +329,7 @@ class SceneReader {
     if (!simulation)
       root.fail_here("simulation", "missing required table [simulation]; it must list at least 'effects'");
     scene.settings = read_simulation(*simulation);
+    read_interaction(root, scene.settings);
 
     const auto planes = array_of_tables(root, "plane");
     if (!planes.empty() && !has(scene.settings.effects, Effect::Planes)) {
@@ -379,6 +383,28 @@ class SceneReader {
     settings.min_box_thickness = sim.number("min_box_thickness", settings.min_box_thickness, kUnitInterval);
     settings.effects = read_effects(sim);
     return settings;
+  }
+
+  // [probe] and [grab]: settings of the interaction effects, only with those effects on.
+  void read_interaction(const TableReader& root, SimulationSettings& settings) const {
+    if (const toml::table* table = root.subtable("probe")) {
+      if (!has(settings.effects, Effect::Probe))
+        root.fail_at("probe", "[probe] is given but the \"probe\" effect is off; add \"probe\" to simulation.effects");
+      const TableReader probe(origin_, *table, "probe", kProbeKeys);
+      ProbeSettings& p = settings.probe;
+      p.radius = probe.number("radius", p.radius, kPositive);
+      p.mass = probe.number("mass", p.mass, kPositive);
+      p.coupling_stiffness = probe.number("coupling_stiffness", p.coupling_stiffness, kNonNegative);
+      p.coupling_damping = probe.number("coupling_damping", p.coupling_damping, kNonNegative);
+      p.start = probe.vec3("start", p.start);
+    }
+    if (const toml::table* table = root.subtable("grab")) {
+      if (!has(settings.effects, Effect::Grab))
+        root.fail_at("grab", "[grab] is given but the \"grab\" effect is off; add \"grab\" to simulation.effects");
+      const TableReader grab(origin_, *table, "grab", kGrabKeys);
+      settings.grab.stiffness = grab.number("stiffness", settings.grab.stiffness, kNonNegative);
+      settings.grab.damping = grab.number("damping", settings.grab.damping, kNonNegative);
+    }
   }
 
   EffectSet read_effects(const TableReader& sim) const {

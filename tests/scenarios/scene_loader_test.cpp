@@ -259,7 +259,7 @@ TEST_CASE("malformed scene files name the file, line, column and field", "[scene
   SECTION("unknown effect") {
     require_fixture_error("bad_effect.toml",
                           ":3:23: simulation.effects[1]: unknown effect 'frction'; did you mean 'friction'? "
-                          "(valid effects: gravity, planes, inter_collision, self_collision, friction)");
+                          "(valid effects: gravity, planes, inter_collision, self_collision, friction, probe, grab)");
   }
   SECTION("duplicate object name") {
     require_fixture_error("bad_duplicate_name.toml",

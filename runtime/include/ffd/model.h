@@ -21,6 +21,7 @@ enum class Stage : std::uint8_t {
   BroadPhase,   // spatial hash of the boxes, section 6.1
   NarrowPhase,  // node-in-box tests + immediate response, Algorithm 1, sections 6.2 and 7
   Planes,       // static planes: node-below-plane tests + the same response
+  Interaction,  // haptic probe (virtual coupling + probe contacts) and grab spring
   Count
 };
 const char* stage_name(Stage s);
@@ -50,9 +51,8 @@ struct ObjectModel {
 };
 
 struct Spring {
-  Index a, b;              // global node indices
-  double rest_length;      // m
-  double inv_denominator;  // 1 / ((1 + gamma)(w_a + w_b) + alpha~), the XPBD constant of this spring
+  Index a, b;          // global node indices
+  double rest_length;  // m
 };
 
 // A lattice shape-matching region (FastLSM): the nodes within half-width w of its centre.

@@ -17,6 +17,8 @@ enum class Effect : std::uint32_t {
   InterCollision = 1u << 2,  // FFD AABB collisions between different objects
   SelfCollision = 1u << 3,   // FFD AABB collisions between non-adjacent cells of one object
   Friction = 1u << 4,        // tangential term of eq. 8 (beta); without it beta is unused
+  Probe = 1u << 5,           // haptic probe: a sphere proxy coupled to the device pose
+  Grab = 1u << 6,            // grab: a picked point of an object pulled towards a target
 };
 using EffectSet = std::uint32_t;
 inline constexpr bool has(EffectSet set, Effect e) { return (set & static_cast<std::uint32_t>(e)) != 0; }
@@ -26,11 +28,13 @@ inline constexpr EffectSet operator|(Effect a, Effect b) {
 inline constexpr EffectSet operator|(EffectSet a, Effect b) { return a | static_cast<std::uint32_t>(b); }
 
 // Name <-> effect, for scene files and reports ("gravity", "planes", "inter_collision",
-// "self_collision", "friction"). effect_from_name returns false for an unknown name.
+// "self_collision", "friction", "probe", "grab"). effect_from_name returns false for an
+// unknown name.
 const char* effect_name(Effect e);
 bool effect_from_name(const std::string& name, Effect& out);
-inline constexpr Effect kAllEffects[] = {Effect::Gravity, Effect::Planes, Effect::InterCollision,
-                                         Effect::SelfCollision, Effect::Friction};
+inline constexpr Effect kAllEffects[] = {Effect::Gravity,       Effect::Planes,   Effect::InterCollision,
+                                         Effect::SelfCollision, Effect::Friction, Effect::Probe,
+                                         Effect::Grab};
 
 enum class DynamicsKind : std::uint8_t {
   MassSpring,     // edge, face- and body-diagonal springs, XPBD compliant constraints
@@ -71,6 +75,24 @@ struct PlaneSpec {
   double offset = 0.0;          // plane: normal . x = offset (m)
 };
 
+// The haptic probe: a rigid sphere proxy of mass `mass` tied to the device position by a
+// spring-damper (the virtual coupling). The coupling force is the force output a device
+// renders. Its nodes are tested against the FFD AABBs like the nodes of a box.
+struct ProbeSettings {
+  double radius = 0.01;               // m
+  double mass = 0.05;                 // kg, of the proxy
+  double coupling_stiffness = 300.0;  // N/m
+  double coupling_damping = 6.0;      // N*s/m, on the proxy's velocity relative to the device
+  Vec3 start = Vec3(0.0, 0.5, 0.0);   // m, device and proxy position at time zero
+};
+
+// Grab: a point of an object (a lattice cell and local coordinates in it) pulled towards a
+// target by a spring-damper acting on the cell's 8 nodes.
+struct GrabSettings {
+  double stiffness = 200.0;  // N/m
+  double damping = 2.0;      // N*s/m, on the point's velocity
+};
+
 // Scene-wide settings. alpha, beta and gravity are the starting values of State::params,
 // which commands may change while a scene runs.
 struct SimulationSettings {
@@ -83,6 +105,8 @@ struct SimulationSettings {
   int hash_table_size = 4000;            // buckets (paper: 4000); grown for large scenes
   double hash_cell_size = 0.0;           // m; 0 = the largest object cell size
   double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
+  ProbeSettings probe;                   // used with the "probe" effect
+  GrabSettings grab;                     // used with the "grab" effect
 };
 
 struct SceneSpec {

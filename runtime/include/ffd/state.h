@@ -13,6 +13,28 @@ struct TunableParams {
   Vec3 gravity = Vec3::Zero();  // m/s^2
   double alpha = 0.0;           // collision damping, eq. 8
   double beta = 0.0;            // friction, eq. 8
+  // (objects) per object: N/m per spring (mass_spring) or the pull fraction (shape_matching)
+  std::vector<double> stiffness;
+};
+
+// The haptic probe (the "probe" effect): the device position commanded from outside and the
+// sphere proxy that follows it through the virtual coupling.
+struct ProbeState {
+  Vec3 device = Vec3::Zero();           // m, commanded device position
+  Vec3 device_previous = Vec3::Zero();  // m, at the previous step (device velocity = difference / dt)
+  Vec3 x = Vec3::Zero();                // m, proxy centre
+  Vec3 v = Vec3::Zero();                // m/s, proxy velocity
+  Vec3 force = Vec3::Zero();            // N, coupling force on the device: the force output
+};
+
+// A grabbed point (the "grab" effect): trilinear coordinates `local` in lattice cell `cell`,
+// pulled towards `target`.
+struct GrabState {
+  bool active = false;
+  Index cell = kNoIndex;         // global cell index
+  Vec3 local = Vec3::Zero();     // (s, t, u) in [0, 1]^3
+  Vec3 target = Vec3::Zero();    // m
+  Vec3 force = Vec3::Zero();     // N, spring force on the object at the grabbed point
 };
 
 struct State {
@@ -21,9 +43,12 @@ struct State {
   std::vector<Vec3> x;  // (N) lattice node positions, m
   std::vector<Vec3> v;  // (N) lattice node velocities, m/s
   std::vector<Quat> region_rotation;  // (R) shape-matching rotations, warm start of the next step
+  ProbeState probe;
+  GrabState grab;
 };
 
-// FNV-1a (64 bit) over the raw bits of every x, then every v, in node order.
+// FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,
+// then the probe proxy's x and v, in node order. ~20 us for 3,000 nodes.
 std::uint64_t state_hash(const State& state);
 
 }  // namespace ffd

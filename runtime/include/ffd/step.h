@@ -22,6 +22,17 @@ struct StageCounters {
   std::uint32_t inter_contacts = 0;     // nodes found inside a box of another object
   std::uint32_t self_contacts = 0;      // nodes found inside a non-adjacent box of the same object
   std::uint32_t plane_contacts = 0;     // boxes found below a static plane
+  std::uint32_t probe_contacts = 0;     // probe nodes in a box, or box nodes in the probe sphere
+};
+
+enum class ContactKind : std::uint8_t { Inter, Self, Plane, Probe };
+
+// One contact found and answered this step, for display: where, along which normal, how deep.
+struct Contact {
+  Vec3 point = Vec3::Zero();   // m, the node found inside
+  Vec3 normal = Vec3::Zero();  // unit, direction the node was pushed out along
+  double depth = 0.0;          // m, r of eq. 7
+  ContactKind kind = ContactKind::Inter;
 };
 
 inline constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::Count);
@@ -34,6 +45,8 @@ struct StepReport {
   double max_box_penetration_m = 0.0;  // deepest node-in-box or node-below-plane depth r
   bool finite = true;                  // every x and v finite after the step
   bool hash_overflow = false;          // broad phase ran out of entry room; grow_scratch() fixes it
+  std::uint32_t contacts_recorded = 0; // Scratch::contacts[0 .. contacts_recorded) hold this step's
+  std::uint32_t contacts_dropped = 0;  // contacts beyond Scratch::contacts' capacity (not recorded)
 };
 
 // Working memory of step(): derived per step, never part of the State.
@@ -58,7 +71,17 @@ struct Scratch {
   std::vector<Vec3> x_prev;        // positions at the start of the step
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
   std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
+  // Contacts of the step, for frames; fixed capacity, the excess is counted not stored.
+  std::vector<Contact> contacts;
+  std::uint32_t contact_count = 0;
+  std::uint32_t contacts_dropped = 0;
+  void record_contact(const Vec3& point, const Vec3& normal, double depth, ContactKind kind) {
+    if (contact_count < contacts.size()) contacts[contact_count++] = {point, normal, depth, kind};
+    else ++contacts_dropped;
+  }
 };
+
+inline constexpr std::size_t kContactCapacity = 4096;
 
 Scratch make_scratch(const Model& model);
 // Makes room for what the last step reported it lacked (call between steps).

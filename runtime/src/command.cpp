@@ -1,0 +1,93 @@
+#include "ffd/command.h"
+
+#include <cmath>
+
+namespace ffd {
+
+const char* command_name(CommandKind kind) {
+  switch (kind) {
+    case CommandKind::ProbePose: return "probe";
+    case CommandKind::Grab: return "grab";
+    case CommandKind::Drag: return "drag";
+    case CommandKind::Release: return "release";
+    case CommandKind::SetAlpha: return "alpha";
+    case CommandKind::SetBeta: return "beta";
+    case CommandKind::SetGravity: return "gravity";
+    case CommandKind::SetStiffness: return "stiffness";
+    case CommandKind::Reset: return "reset";
+    case CommandKind::SetBudget: return "budget";
+    case CommandKind::Pause: return "pause";
+    case CommandKind::Resume: return "resume";
+    case CommandKind::SingleStep: return "single_step";
+  }
+  return "?";
+}
+
+namespace {
+// isfinite first: an ordered comparison with NaN raises FE_INVALID.
+bool in_unit_interval(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
+}  // namespace
+
+bool command_is_valid(const Model& model, const Command& c) {
+  switch (c.kind) {
+    case CommandKind::ProbePose: return has(model.settings.effects, Effect::Probe) && is_finite(c.vector);
+    case CommandKind::Grab:
+      return has(model.settings.effects, Effect::Grab) && c.cell < model.cell_count() && is_finite(c.vector) &&
+             in_unit_interval(c.local.x()) && in_unit_interval(c.local.y()) && in_unit_interval(c.local.z());
+    case CommandKind::Drag: return has(model.settings.effects, Effect::Grab) && is_finite(c.vector);
+    case CommandKind::Release: return has(model.settings.effects, Effect::Grab);
+    case CommandKind::SetAlpha:
+    case CommandKind::SetBeta: return in_unit_interval(c.value);
+    case CommandKind::SetGravity: return is_finite(c.vector);
+    case CommandKind::SetStiffness: {
+      if (c.object >= model.objects.size() || !std::isfinite(c.value) || !(c.value > 0.0)) return false;
+      return model.objects[c.object].dynamics == DynamicsKind::MassSpring || c.value <= 1.0;
+    }
+    case CommandKind::SetBudget: return std::isfinite(c.value) && c.value > 0.0;
+    case CommandKind::Pause: return std::isfinite(c.value) && c.value >= 0.0;
+    case CommandKind::Reset:
+    case CommandKind::Resume:
+    case CommandKind::SingleStep: return true;
+  }
+  return false;
+}
+
+void apply_command(const Model& model, const State& initial, State& state, const Command& c) {
+  (void)model;
+  switch (c.kind) {
+    case CommandKind::ProbePose: state.probe.device = c.vector; break;
+    case CommandKind::Grab:
+      state.grab.active = true;
+      state.grab.cell = c.cell;
+      state.grab.local = c.local;
+      state.grab.target = c.vector;
+      break;
+    case CommandKind::Drag: state.grab.target = c.vector; break;
+    case CommandKind::Release:
+      state.grab.active = false;
+      state.grab.force = Vec3::Zero();
+      break;
+    case CommandKind::SetAlpha: state.params.alpha = c.value; break;
+    case CommandKind::SetBeta: state.params.beta = c.value; break;
+    case CommandKind::SetGravity: state.params.gravity = c.vector; break;
+    case CommandKind::SetStiffness: state.params.stiffness[c.object] = c.value; break;
+    case CommandKind::Reset: {
+      // Element-wise copies into vectors of the same size: no allocation.
+      const std::uint64_t step = state.step;
+      state.params.gravity = initial.params.gravity;
+      state.params.alpha = initial.params.alpha;
+      state.params.beta = initial.params.beta;
+      std::copy(initial.params.stiffness.begin(), initial.params.stiffness.end(), state.params.stiffness.begin());
+      std::copy(initial.x.begin(), initial.x.end(), state.x.begin());
+      std::copy(initial.v.begin(), initial.v.end(), state.v.begin());
+      std::copy(initial.region_rotation.begin(), initial.region_rotation.end(), state.region_rotation.begin());
+      state.probe = initial.probe;
+      state.grab = initial.grab;
+      state.step = step;
+      break;
+    }
+    default: break;  // loop commands: handled by the physics loop
+  }
+}
+
+}  // namespace ffd

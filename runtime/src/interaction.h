@@ -1,0 +1,17 @@
+#pragma once
+// The Interaction stage: the haptic probe (virtual coupling + contacts with the FFD AABBs)
+// and the grab spring. Runs after the collision stages so that what a user does acts on the
+// step's final positions, and the force output is that of the finished step.
+#include "ffd/model.h"
+#include "ffd/step.h"
+
+namespace ffd {
+
+void interact(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+
+// The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
+// directions, 12 edge and 8 corner directions of a cube (27 in all).
+inline constexpr int kProbeNodeCount = 27;
+Vec3 probe_node_offset(int k);
+
+}  // namespace ffd
