@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "ffd/trilinear.h"
+
 namespace ffd {
 
 const char* command_name(CommandKind kind) {
@@ -32,7 +34,7 @@ bool command_is_valid(const Model& model, const Command& c) {
   switch (c.kind) {
     case CommandKind::ProbePose: return has(model.settings.effects, Effect::Probe) && is_finite(c.vector);
     case CommandKind::Grab:
-      return has(model.settings.effects, Effect::Grab) && c.cell < model.cell_count() && is_finite(c.vector) &&
+      return has(model.settings.effects, Effect::Grab) && c.cell < model.cell_count() &&
              in_unit_interval(c.local.x()) && in_unit_interval(c.local.y()) && in_unit_interval(c.local.z());
     case CommandKind::Drag: return has(model.settings.effects, Effect::Grab) && is_finite(c.vector);
     case CommandKind::Release: return has(model.settings.effects, Effect::Grab);
@@ -53,15 +55,17 @@ bool command_is_valid(const Model& model, const Command& c) {
 }
 
 void apply_command(const Model& model, const State& initial, State& state, const Command& c) {
-  (void)model;
   switch (c.kind) {
     case CommandKind::ProbePose: state.probe.device = c.vector; break;
-    case CommandKind::Grab:
+    case CommandKind::Grab: {
+      // The target starts at the point itself, so grabbing never yanks; Drag moves it.
       state.grab.active = true;
       state.grab.cell = c.cell;
       state.grab.local = c.local;
-      state.grab.target = c.vector;
+      const std::array<Index, 8>& corners = model.cell_nodes[c.cell];
+      state.grab.target = trilinear_map(c.local, [&](int j) -> const Vec3& { return state.x[corners[j]]; });
       break;
+    }
     case CommandKind::Drag: state.grab.target = c.vector; break;
     case CommandKind::Release:
       state.grab.active = false;

@@ -33,6 +33,15 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
   const double compliance = 1.0 / stiffness;            // m/N
   const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
   const double gamma = compliance * p.damping / dt;     // XPBD damping term
+  const std::size_t object = &obj - model.objects.data();
+  if (scratch.denominator_stiffness[object] != stiffness) {
+    for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
+      const Spring& spring = model.springs[s];
+      const double w = model.node_inv_mass[spring.a] + model.node_inv_mass[spring.b];
+      scratch.spring_inv_denominator[s] = 1.0 / ((1.0 + gamma) * w + alpha_tilde);
+    }
+    scratch.denominator_stiffness[object] = stiffness;
+  }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
   for (int it = 0; it < p.iterations; ++it) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
@@ -46,8 +55,7 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
       const double wa = model.node_inv_mass[spring.a], wb = model.node_inv_mass[spring.b];
       const double C = len - spring.rest_length;
       const double damping_term = gamma * grad.dot((xa - scratch.x_prev[spring.a]) - (xb - scratch.x_prev[spring.b]));
-      const double denominator = (1.0 + gamma) * (wa + wb) + alpha_tilde;
-      const double dlambda = (-C - alpha_tilde * scratch.lambda[s] - damping_term) / denominator;
+      const double dlambda = (-C - alpha_tilde * scratch.lambda[s] - damping_term) * scratch.spring_inv_denominator[s];
       scratch.lambda[s] += dlambda;
       xa += (wa * dlambda) * grad;
       xb -= (wb * dlambda) * grad;

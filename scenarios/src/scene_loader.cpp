@@ -4,7 +4,6 @@
 // never silently falls back to a default.
 #include "ffd/scene_loader.h"
 
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <charconv>
@@ -21,268 +20,10 @@
 #include <vector>
 
 #include "ffd/mesh_import.h"
+#include "ffd/toml_reader.h"
 
 namespace ffd {
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string format_number(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
-
-std::string in_quotes(std::string_view text) { return "'" + std::string(text) + "'"; }
-
-std::string describe_type(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a floating-point number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::date: return "a date";
-    case toml::node_type::time: return "a time";
-    case toml::node_type::date_time: return "a date-time";
-    default: return "nothing";
-  }
-}
-
-// Optimal string alignment distance: a transposed pair ("nmae") counts as one edit,
-// which is the commonest typo in key names.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    }
-  }
-  return d[a.size()][b.size()];
-}
-
-// The closest candidate within a couple of edits, else one the word is a prefix of or
-// extends ("rotation" for "rotation_deg"), else nothing: no candidate is a plausible intent.
-std::optional<std::string_view> closest_match(std::string_view word,
-                                              const std::vector<std::string_view>& candidates) {
-  const std::size_t budget = word.size() >= 6 ? 2 : 1;
-  std::optional<std::string_view> best;
-  std::size_t best_distance = budget + 1;
-  for (const std::string_view candidate : candidates) {
-    const std::size_t distance = edit_distance(word, candidate);
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = candidate;
-    }
-  }
-  if (best) return best;
-  constexpr std::size_t kMinPrefix = 4;  // shorter prefixes match too much to be a hint
-  for (const std::string_view candidate : candidates) {
-    if (std::min(word.size(), candidate.size()) < kMinPrefix) continue;
-    if (candidate.starts_with(word) || word.starts_with(candidate)) return candidate;
-  }
-  return std::nullopt;
-}
-
-std::string join(const std::vector<std::string_view>& words) {
-  std::string out;
-  for (const std::string_view word : words) {
-    if (!out.empty()) out += ", ";
-    out += word;
-  }
-  return out;
-}
-
-// An allowed interval for a number; "in (0, 0.01]", "> 0", ">= 0" in messages.
-struct Bounds {
-  double low = -kInf;
-  double high = kInf;
-  bool low_open = false;
-  bool high_open = false;
-
-  bool contains(double v) const {
-    const bool above = low_open ? v > low : v >= low;
-    const bool below = high_open ? v < high : v <= high;
-    return above && below;
-  }
-  std::string describe() const {
-    if (high == kInf) return std::string(low_open ? "> " : ">= ") + format_number(low);
-    if (low == -kInf) return std::string(high_open ? "< " : "<= ") + format_number(high);
-    return "in " + std::string(low_open ? "(" : "[") + format_number(low) + ", " + format_number(high) +
-           (high_open ? ")" : "]");
-  }
-};
-constexpr Bounds kAnyValue{};
-constexpr Bounds kPositive{0.0, kInf, true, false};
-constexpr Bounds kNonNegative{0.0, kInf, false, false};
-constexpr Bounds kUnitInterval{0.0, 1.0, false, false};
-
-// One TOML table being read: knows its dotted path for messages, rejects keys it does
-// not know as soon as it is opened, and reads typed, range-checked values.
-class TableReader {
- public:
-  // `misplaced_hint` may say where an unknown key belongs instead ("... goes in [simulation]").
-  TableReader(const std::string& origin, const toml::table& table, std::string path,
-              std::vector<std::string_view> known_keys,
-              const std::function<std::string(std::string_view)>& misplaced_hint = {})
-      : origin_(origin), table_(table), path_(std::move(path)), known_keys_(std::move(known_keys)) {
-    reject_unknown_keys(misplaced_hint);
-  }
-
-  const toml::table& table() const { return table_; }
-  const std::string& path() const { return path_; }
-  std::string field(std::string_view key) const {
-    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
-  }
-  const toml::node* find(std::string_view key) const { return table_.get(key); }
-  bool has(std::string_view key) const { return find(key) != nullptr; }
-
-  [[noreturn]] void fail(const toml::source_region& where, const std::string& field,
-                         const std::string& problem) const {
-    std::ostringstream message;
-    message << origin_ << ':' << where.begin.line << ':' << where.begin.column << ": " << field << ": "
-            << problem;
-    throw SceneError(message.str());
-  }
-  // At the value of `key` (which must be present).
-  [[noreturn]] void fail_at(std::string_view key, const std::string& problem) const {
-    fail(find(key)->source(), field(key), problem);
-  }
-  // At the table itself: for what is missing from it.
-  [[noreturn]] void fail_here(const std::string& field_name, const std::string& problem) const {
-    fail(table_.source(), field_name, problem);
-  }
-  [[noreturn]] void fail_missing(std::string_view key, const std::string& why = "") const {
-    fail_here(field(key), "missing required key" + why);
-  }
-
-  double number(std::string_view key, double fallback, const Bounds& bounds) const {
-    const toml::node* node = find(key);
-    return node ? to_number(*node, field(key), bounds) : fallback;
-  }
-  double required_number(std::string_view key, const Bounds& bounds, const std::string& why = "") const {
-    if (!has(key)) fail_missing(key, why);
-    return number(key, 0.0, bounds);
-  }
-
-  std::int64_t integer(std::string_view key, std::int64_t fallback, std::int64_t low,
-                       std::int64_t high) const {
-    const toml::node* node = find(key);
-    if (!node) return fallback;
-    const auto* value = node->as_integer();
-    if (!value) fail_at(key, "expected an integer (got " + describe_type(*node) + ")");
-    const std::int64_t v = value->get();
-    if (v < low || v > high) {
-      const std::string range = high == std::numeric_limits<std::int64_t>::max()
-                                    ? ">= " + std::to_string(low)
-                                    : "in [" + std::to_string(low) + ", " + std::to_string(high) + "]";
-      fail_at(key, "must be " + range + " (got " + std::to_string(v) + ")");
-    }
-    return v;
-  }
-
-  bool boolean(std::string_view key, bool fallback) const {
-    const toml::node* node = find(key);
-    if (!node) return fallback;
-    const auto* value = node->as_boolean();
-    if (!value) fail_at(key, "expected true or false (got " + describe_type(*node) + ")");
-    return value->get();
-  }
-
-  std::optional<std::string> string(std::string_view key) const {
-    const toml::node* node = find(key);
-    if (!node) return std::nullopt;
-    const auto* value = node->as_string();
-    if (!value) fail_at(key, "expected a string (got " + describe_type(*node) + ")");
-    if (value->get().empty()) fail_at(key, "must not be empty");
-    return value->get();
-  }
-
-  Vec3 vec3(std::string_view key, const Vec3& fallback, const Bounds& bounds = kAnyValue) const {
-    const toml::node* node = find(key);
-    return node ? to_vec3(*node, field(key), bounds) : fallback;
-  }
-
-  const toml::table* subtable(std::string_view key) const {
-    const toml::node* node = find(key);
-    if (!node) return nullptr;
-    const auto* table = node->as_table();
-    if (!table) fail_at(key, "expected a table (got " + describe_type(*node) + ")");
-    return table;
-  }
-
-  double to_number(const toml::node& node, const std::string& field_name, const Bounds& bounds) const {
-    double v = 0.0;
-    if (const auto* integer = node.as_integer()) {
-      v = static_cast<double>(integer->get());
-    } else if (const auto* floating = node.as_floating_point()) {
-      v = floating->get();
-    } else {
-      fail(node.source(), field_name, "expected a number (got " + describe_type(node) + ")");
-    }
-    // Checked before any comparison: comparing a NaN raises FE_INVALID.
-    if (!std::isfinite(v)) fail(node.source(), field_name, "must be finite (got " + format_number(v) + ")");
-    if (!bounds.contains(v)) {
-      fail(node.source(), field_name, "must be " + bounds.describe() + " (got " + format_number(v) + ")");
-    }
-    return v;
-  }
-
-  Vec3 to_vec3(const toml::node& node, const std::string& field_name, const Bounds& bounds) const {
-    const auto* array = node.as_array();
-    if (!array)
-      fail(node.source(), field_name, "expected an array [x, y, z] (got " + describe_type(node) + ")");
-    if (array->size() != 3) {
-      fail(node.source(), field_name,
-           "expected 3 numbers [x, y, z] (got " + std::to_string(array->size()) + ")");
-    }
-    Vec3 v;
-    for (int i = 0; i < 3; ++i) {
-      v[i] = to_number(*array->get(static_cast<std::size_t>(i)), field_name + "[" + std::to_string(i) + "]",
-                       bounds);
-    }
-    return v;
-  }
-
- private:
-  void reject_unknown_keys(const std::function<std::string(std::string_view)>& misplaced_hint) const {
-    // The earliest unknown key in the file, not the first in the table's sorted order.
-    const toml::key* first_unknown = nullptr;
-    for (auto&& [key, value] : table_) {
-      (void)value;
-      if (std::find(known_keys_.begin(), known_keys_.end(), key.str()) != known_keys_.end()) continue;
-      const auto& here = key.source().begin;
-      if (!first_unknown || here.line < first_unknown->source().begin.line ||
-          (here.line == first_unknown->source().begin.line &&
-           here.column < first_unknown->source().begin.column)) {
-        first_unknown = &key;
-      }
-    }
-    if (!first_unknown) return;
-    const std::string_view name = first_unknown->str();
-    std::string problem = "unknown key " + in_quotes(name);
-    if (const auto suggestion = closest_match(name, known_keys_)) {
-      problem += "; did you mean " + in_quotes(*suggestion) + "?";
-    } else if (std::string hint = misplaced_hint ? misplaced_hint(name) : ""; !hint.empty()) {
-      problem += "; " + hint;
-    } else {
-      problem += " (valid keys: " + join(known_keys_) + ")";
-    }
-    fail(first_unknown->source(), field(name), problem);
-  }
-
-  const std::string& origin_;
-  const toml::table& table_;
-  std::string path_;
-  std::vector<std::string_view> known_keys_;
-};
 
 const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object", "probe", "grab"};
 const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_stiffness", "coupling_damping",
@@ -346,28 +87,6 @@ class SceneReader {
   }
 
  private:
-  // `[[plane]]` / `[[object]]`: an array whose every element is a table.
-  std::vector<const toml::table*> array_of_tables(const TableReader& root, std::string_view key) const {
-    std::vector<const toml::table*> tables;
-    const toml::node* node = root.find(key);
-    if (!node) return tables;
-    const auto* array = node->as_array();
-    if (!array) {
-      root.fail_at(key,
-                   "expected an array of tables; write [[" + std::string(key) + "]] with double brackets");
-    }
-    for (std::size_t i = 0; i < array->size(); ++i) {
-      const toml::node& element = *array->get(i);
-      const auto* table = element.as_table();
-      if (!table) {
-        root.fail(element.source(), std::string(key) + "[" + std::to_string(i) + "]",
-                  "expected a table (got " + describe_type(element) + ")");
-      }
-      tables.push_back(table);
-    }
-    return tables;
-  }
-
   SimulationSettings read_simulation(const toml::table& table) const {
     const TableReader sim(origin_, table, "simulation", kSimulationKeys);
     SimulationSettings settings;
@@ -614,28 +333,15 @@ class SceneReader {
 }  // namespace
 
 SceneSpec parse_scene(const std::string& text, const std::string& origin, const std::string& base_dir) {
-  toml::table root;
-  try {
-    root = toml::parse(text, std::string_view(origin));
-  } catch (const toml::parse_error& e) {
-    std::ostringstream message;
-    message << origin << ':' << e.source().begin.line << ':' << e.source().begin.column
-            << ": TOML syntax error: " << e.description();
-    throw SceneError(message.str());
-  }
-  return SceneReader(origin, base_dir).read(root);
+  return read_scene_table(parse_toml(text, origin), origin, base_dir);
+}
+
+SceneSpec read_scene_table(const toml::table& table, const std::string& origin, const std::string& base_dir) {
+  return SceneReader(origin, base_dir).read(table);
 }
 
 SceneSpec load_scene_file(const std::string& path) {
-  std::error_code error;
-  std::ifstream file(path, std::ios::binary);
-  // A folder opens as a stream on Linux but cannot be read.
-  if (!file || std::filesystem::is_directory(path, error))
-    throw SceneError(path + ": cannot open scene file");
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) throw SceneError(path + ": cannot read scene file");
-  return parse_scene(text.str(), path, std::filesystem::path(path).parent_path().string());
+  return parse_scene(read_text_file(path, "scene file"), path, std::filesystem::path(path).parent_path().string());
 }
 
 std::string default_scene_path() { return FFDSIM_SCENARIO_DIR "/scenes/two_teapots.toml"; }

@@ -49,9 +49,9 @@ void require_fixture_error(const std::string& name, const std::string& position_
   REQUIRE_THROWS_WITH(load_fixture(name), StartsWith(fixture(name) + position_and_field));
 }
 
-constexpr ffd::EffectSet kFiveEffects = ffd::Effect::Gravity | ffd::Effect::Planes |
+constexpr ffd::EffectSet kEveryEffect = ffd::Effect::Gravity | ffd::Effect::Planes |
                                         ffd::Effect::InterCollision | ffd::Effect::SelfCollision |
-                                        ffd::Effect::Friction;
+                                        ffd::Effect::Friction | ffd::Effect::Probe | ffd::Effect::Grab;
 
 }  // namespace
 
@@ -60,7 +60,7 @@ TEST_CASE("the default scene is two teapots above a floor with every effect", "[
   const ffd::SceneSpec scene = ffd::default_scene();
 
   CHECK(scene.name == "two_teapots");
-  CHECK(scene.settings.effects == kFiveEffects);
+  CHECK(scene.settings.effects == kEveryEffect);
   CHECK(scene.settings.dt == 0.001);
   CHECK(scene.settings.gravity == ffd::Vec3(0.0, -9.81, 0.0));
   CHECK(scene.settings.alpha == 1.0);

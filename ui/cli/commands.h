@@ -6,6 +6,16 @@
 
 namespace ffdsim {
 
+// Exit codes shared by the subcommands.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitUsage = 1;            // command line rejected (CLI11)
+inline constexpr int kExitBadInput = 2;         // a scene, script, mesh or output path is wrong
+inline constexpr int kExitNonFinite = 3;        // the simulation produced NaN or infinity
+inline constexpr int kExitAssertionFailed = 4;  // a replay assertion failed
+
+// Creates the folder a file will be written into; throws naming it on failure.
+void ensure_parent_folder(const std::string& file_path);
+
 struct SimulateOptions {
   std::string scene;  // empty = the default scene
   long long steps = 3000;
@@ -14,8 +24,30 @@ struct SimulateOptions {
   std::string out_dir;
   bool quiet = false;
 };
-
 void register_simulate(CLI::App& app, SimulateOptions& options);
 int run_simulate(const SimulateOptions& options);
+
+struct ReplayOptions {
+  std::string script;
+  bool fast = false, realtime = false;
+  std::string report_path;
+  double period_us = 1000.0, budget_us = 1000.0;
+  bool quiet = false;
+};
+void register_replay(CLI::App& app, ReplayOptions& options);
+int run_replay_command(const ReplayOptions& options);
+
+struct RunOptions {
+  std::string scene;  // empty = the default scene
+  bool headless = false;
+  double seconds = 10.0;
+  std::string record_path;
+  long long hash_every = 100;
+  std::string report_path;
+  double period_us = 1000.0, budget_us = 1000.0, spin_us = 20.0;
+  bool quiet = false;
+};
+void register_run(CLI::App& app, RunOptions& options);
+int run_run(const RunOptions& options);
 
 }  // namespace ffdsim

@@ -1,8 +1,19 @@
 // ffdsim: one program, subcommands. `ffdsim --help` lists them.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 
 #include "commands.h"
+
+namespace ffdsim {
+void ensure_parent_folder(const std::string& file_path) {
+  const std::filesystem::path dir = std::filesystem::path(file_path).parent_path();
+  if (dir.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot create folder: " + ec.message());
+}
+}  // namespace ffdsim
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -11,11 +22,17 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ffdsim::SimulateOptions simulate;
   ffdsim::register_simulate(app, simulate);
+  ffdsim::ReplayOptions replay;
+  ffdsim::register_replay(app, replay);
+  ffdsim::RunOptions run;
+  ffdsim::register_run(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   if (app.got_subcommand("simulate")) return ffdsim::run_simulate(simulate);
-  return 1;
+  if (app.got_subcommand("replay")) return ffdsim::run_replay_command(replay);
+  if (app.got_subcommand("run")) return ffdsim::run_run(run);
+  return ffdsim::kExitUsage;
 }

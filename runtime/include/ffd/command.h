@@ -12,7 +12,7 @@ namespace ffd {
 enum class CommandKind : std::uint8_t {
   // State commands: they change the State and are part of what a recording replays.
   ProbePose,     // vector: device position (m)
-  Grab,          // cell + local: the picked point; vector: first target (m)
+  Grab,          // cell + local: the picked point; its target starts where the point is now
   Drag,          // vector: new target of the grabbed point (m)
   Release,       // let go of the grabbed point
   SetAlpha,      // value: collision damping, eq. 8, [0, 1]

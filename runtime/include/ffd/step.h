@@ -70,6 +70,10 @@ struct Scratch {
   // Dynamics.
   std::vector<Vec3> x_prev;        // positions at the start of the step
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
+  // XPBD 1 / ((1 + gamma)(w_a + w_b) + alpha~) per spring, for the stiffness in
+  // `denominator_stiffness` (per object): recomputed only when a command changes it.
+  std::vector<double> spring_inv_denominator;
+  std::vector<double> denominator_stiffness;
   std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
   // Contacts of the step, for frames; fixed capacity, the excess is counted not stored.
   std::vector<Contact> contacts;

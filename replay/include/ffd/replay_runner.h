@@ -1,0 +1,70 @@
+#pragma once
+// Runs a replay script on the physics loop (fast or real time), checks its assertions while
+// the telemetry streams in, and says which failed with the measured values.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ffd/physics_loop.h"
+#include "ffd/replay_script.h"
+
+namespace ffd {
+
+// Distribution of one per-step time, microseconds.
+struct TimeDistribution {
+  double p50_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
+};
+// Nearest-rank percentiles of `ns`, which is sorted in place.
+TimeDistribution summarize_ns(std::vector<std::int64_t>& ns);
+
+struct LatencyReport {
+  std::uint64_t steps = 0;
+  TimeDistribution compute, lateness;
+  std::uint64_t deadline_misses = 0;
+  std::uint64_t overruns = 0;
+  bool realtime_priority = false, memory_locked = false;
+};
+
+struct AssertionResult {
+  std::string name;      // "latency.compute_p99_us", "gap[teapot_low, teapot_high].max_gap_m", ...
+  std::string where;     // file:line:col of the assertion, when known
+  bool skipped = false;  // not measurable in this mode (lateness in a fast run)
+  bool passed = true;
+  std::string measured;  // with units
+  std::string limit;     // "<= 5000 us"
+};
+
+struct ReplayResult {
+  Pacing pacing = Pacing::Fast;
+  std::uint64_t steps = 0;             // steps the loop took
+  LatencyReport latency;
+  bool finite = true;
+  std::optional<std::uint64_t> first_non_finite_step;
+  double max_energy_j = 0, max_speed_m_s = 0, max_penetration_m = 0, peak_force_n = 0;
+  // The step each maximum above was reached at.
+  std::uint64_t max_energy_step = 0, max_speed_step = 0, max_penetration_step = 0, peak_force_step = 0;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> hashes;  // (step, state hash) the run produced
+  std::optional<std::uint64_t> first_divergence;  // first hash check that differed
+  std::uint64_t final_hash = 0;
+  std::uint64_t commands_rejected = 0;
+  std::vector<AssertionResult> assertions;
+  bool passed() const;
+};
+
+struct ReplayRunOptions {
+  Pacing pacing = Pacing::Fast;
+  std::int64_t period_ns = 1'000'000;
+  std::int64_t budget_ns = 1'000'000;
+};
+
+ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& options);
+
+// One line per assertion ("PASS latency.compute_p99_us: 812 us (limit <= 5000 us)") and a
+// summary line.
+std::string format_replay_result(const ReplayScript& script, const ReplayResult& result);
+
+// The result as JSON text (for --report).
+std::string replay_result_json(const ReplayScript& script, const ReplayResult& result);
+
+}  // namespace ffd

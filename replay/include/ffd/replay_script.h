@@ -1,0 +1,88 @@
+#pragma once
+// Replay scripts: a scene, timed commands and assertions, in TOML (format in README.md,
+// "Replay scripts"). A recording written by `ffdsim run --record` is a replay script too.
+// Every error names the file, the line, the column and the field:
+//   "poke.toml:14:9: event[2].alpha: must be in [0, 1] (got 1.5)"
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ffd/command.h"
+#include "ffd/model.h"
+#include "ffd/toml_reader.h"
+
+namespace ffd {
+
+using ReplayError = InputError;
+
+inline constexpr int kReplayFormatVersion = 1;
+
+// Assertions. An unset optional is not checked.
+struct LatencyLimits {  // microseconds; lateness and misses only mean something in real time
+  std::optional<double> compute_p50_us, compute_p99_us, compute_max_us;
+  std::optional<double> lateness_p50_us, lateness_p99_us, lateness_max_us;
+  std::optional<std::uint64_t> deadline_misses;
+};
+
+struct StabilityLimits {
+  bool finite = false;                 // every step finite
+  std::optional<double> energy_max_j;  // total energy (kinetic + gravity + elastic) never above
+  std::optional<double> speed_max_m_s; // no lattice node faster than this
+};
+
+struct ContactLimits {
+  std::optional<double> max_penetration_m;  // deepest node-in-box depth r of any step
+};
+
+// Measured on the embedded surfaces (outside the physics thread) every `every_steps` steps
+// in [from_step, to_step].
+struct GapLimit {
+  std::string where;      // "file:line:col" of the assertion, for reports
+  std::string a, b;       // object names
+  Index object_a = 0, object_b = 0;
+  std::optional<double> max_gap_m;          // the surfaces stay within this of each other
+  std::optional<double> max_penetration_m;  // and sink no deeper into each other
+  std::uint64_t from_step = 0, to_step = 0;
+  std::uint64_t every_steps = 10;
+};
+
+struct ForceLimits {  // the probe's force output, N
+  std::optional<double> max_n;       // |F| never above
+  std::optional<double> peak_min_n;  // |F| reached at least this once (the probe touched)
+};
+
+struct HashCheck {
+  std::string where;
+  std::uint64_t step = 0;   // the State after this many steps
+  std::uint64_t value = 0;  // state_hash
+};
+
+struct ReplayScript {
+  std::string path;         // the script file
+  std::string scene_origin; // the scene file, or "<script>[scene]" when inline
+  std::string description;
+  SceneSpec scene;
+  std::uint64_t steps = 0;           // length of the run
+  std::vector<Command> commands;     // resolved against the compiled scene, ordered by step
+  std::uint32_t hash_every = 0;      // a recording's hash interval (0: derived from `hashes`)
+  LatencyLimits latency;
+  StabilityLimits stability;
+  ContactLimits contact;
+  std::vector<GapLimit> gaps;
+  ForceLimits force;
+  std::vector<HashCheck> hashes;     // ordered by step
+};
+
+struct LoadedReplay {
+  ReplayScript script;
+  Model model;  // the scene, compiled
+};
+
+// Reads, validates and resolves a script (object names, grab points, times in ms -> steps).
+// Throws ReplayError (file:line:col: field: problem) for anything wrong, including a scene
+// that does not load or compile.
+LoadedReplay load_replay_file(const std::string& path);
+LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir);
+
+}  // namespace ffd

@@ -1,0 +1,355 @@
+// Drives the physics loop with a script's commands and checks its assertions from the
+// lossless telemetry (per step) and snapshots (surface measurements, off the 1 kHz thread).
+#include "ffd/replay_runner.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "ffd/measure.h"
+#include "ffd/surface_metrics.h"
+
+namespace ffd {
+
+TimeDistribution summarize_ns(std::vector<std::int64_t>& ns) {
+  TimeDistribution d;
+  if (ns.empty()) return d;
+  std::sort(ns.begin(), ns.end());
+  auto at = [&](double pct) {
+    const std::size_t rank = static_cast<std::size_t>(std::ceil(pct / 100.0 * static_cast<double>(ns.size())));
+    return static_cast<double>(ns[std::min(ns.size() - 1, rank == 0 ? 0 : rank - 1)]) / 1000.0;
+  };
+  d.p50_us = at(50.0);
+  d.p99_us = at(99.0);
+  d.p999_us = at(99.9);
+  d.max_us = static_cast<double>(ns.back()) / 1000.0;
+  return d;
+}
+
+bool ReplayResult::passed() const {
+  return std::all_of(assertions.begin(), assertions.end(), [](const AssertionResult& a) { return a.passed; });
+}
+
+namespace {
+
+std::string number(double value, const char* unit) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.4g %s", value, unit);
+  return buffer;
+}
+
+std::string hex(std::uint64_t value) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
+// Surface measurements of one gap assertion, over the snapshots it asked for.
+struct GapMeasure {
+  double max_gap_m = 0.0, max_penetration_m = 0.0;
+  std::uint64_t samples = 0;
+  std::uint64_t worst_gap_step = 0, worst_penetration_step = 0;
+};
+
+std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
+  std::uint64_t g = 0;
+  for (const GapLimit& gap : script.gaps) g = std::gcd(g, gap.every_steps);
+  return g;
+}
+
+std::uint64_t hash_interval(const ReplayScript& script) {
+  if (script.hash_every) return script.hash_every;
+  std::uint64_t g = 0;
+  for (const HashCheck& h : script.hashes) g = std::gcd(g, h.step);
+  return g;
+}
+
+void check_upper(std::vector<AssertionResult>& out, const std::string& name, const std::string& where,
+                 const std::optional<double>& limit, double measured, const char* unit, bool skipped = false,
+                 std::optional<std::uint64_t> at_step = std::nullopt) {
+  if (!limit) return;
+  AssertionResult a;
+  a.name = name;
+  a.where = where;
+  a.skipped = skipped;
+  a.measured = number(measured, unit);
+  if (at_step) a.measured += " at step " + std::to_string(*at_step);
+  a.limit = "<= " + number(*limit, unit);
+  a.passed = skipped || measured <= *limit;
+  out.push_back(a);
+}
+
+}  // namespace
+
+ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_options) {
+  const ReplayScript& script = replay.script;
+  const Model& model = replay.model;
+  ReplayResult result;
+  result.pacing = run_options.pacing;
+
+  LoopOptions options;
+  options.pacing = run_options.pacing;
+  options.period_ns = run_options.period_ns;
+  options.budget_ns = run_options.budget_ns;
+  options.stop_at_step = script.steps;
+  options.hash_every = static_cast<std::uint32_t>(hash_interval(script));
+  options.energy_every = 10;
+  options.frame_every = 0;  // nobody looks
+  options.snapshot_every = static_cast<std::uint32_t>(gcd_of_sample_steps(script));
+  // Commands for the whole run wait in the loop's queue from the start.
+  options.command_capacity = std::max<std::size_t>(1 << 12, script.commands.size() + 16);
+  PhysicsLoop loop(model, initial_state(model), options);
+  for (const Command& c : script.commands) loop.push(c);
+
+  std::vector<std::int64_t> compute_ns, lateness_ns;
+  compute_ns.reserve(script.steps);
+  lateness_ns.reserve(script.steps);
+  std::vector<GapMeasure> gaps(script.gaps.size());
+  double largest_cell = 0.0;
+  for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
+  State surface_state = initial_state(model);  // holds a snapshot's lattice for deformed_surface()
+  std::size_t next_hash = 0;
+
+  auto drain = [&] {
+    Telemetry t;
+    while (loop.pop_telemetry(t)) {
+      ++result.steps;
+      compute_ns.push_back(t.compute_ns);
+      lateness_ns.push_back(t.lateness_ns);
+      if (!t.finite && result.finite) {
+        result.finite = false;
+        result.first_non_finite_step = t.step;
+      }
+      auto track = [&](double value, double& max, std::uint64_t& at) {
+        if (value > max) {
+          max = value;
+          at = t.step;
+        }
+      };
+      if (t.has_energy) track(t.energy_j, result.max_energy_j, result.max_energy_step);
+      track(t.max_speed_m_s, result.max_speed_m_s, result.max_speed_step);
+      track(t.max_penetration_m, result.max_penetration_m, result.max_penetration_step);
+      track(t.probe_force_n.norm(), result.peak_force_n, result.peak_force_step);
+      if (t.has_hash) {
+        result.hashes.emplace_back(t.step, t.state_hash);
+        while (next_hash < script.hashes.size() && script.hashes[next_hash].step < t.step) ++next_hash;
+        if (next_hash < script.hashes.size() && script.hashes[next_hash].step == t.step &&
+            script.hashes[next_hash].value != t.state_hash && !result.first_divergence)
+          result.first_divergence = t.step;
+      }
+    }
+    while (Snapshot* s = loop.pop_snapshot()) {
+      std::copy(s->x.begin(), s->x.end(), surface_state.x.begin());
+      const std::uint64_t step = s->step;
+      loop.recycle(s);
+      for (std::size_t i = 0; i < script.gaps.size(); ++i) {
+        const GapLimit& g = script.gaps[i];
+        if (step < g.from_step || step > g.to_step || step % g.every_steps != 0) continue;
+        const double radius = std::max(2.0 * g.max_gap_m.value_or(0.0), largest_cell);
+        const PairContactMetrics m = measure_pair(deformed_surface(model, surface_state, g.object_a),
+                                                  deformed_surface(model, surface_state, g.object_b), radius);
+        const double gap = m.near ? m.gap_m : radius;
+        GapMeasure& out = gaps[i];
+        ++out.samples;
+        if (gap > out.max_gap_m || out.samples == 1) {
+          out.max_gap_m = gap;
+          out.worst_gap_step = step;
+        }
+        if (m.penetration_m > out.max_penetration_m) {
+          out.max_penetration_m = m.penetration_m;
+          out.worst_penetration_step = step;
+        }
+      }
+    }
+  };
+
+  loop.start();
+  while (!loop.finished()) {
+    drain();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  loop.join();
+  drain();
+
+  result.final_hash = state_hash(loop.state());
+  const LoopCounters counters = loop.counters();
+  result.commands_rejected = counters.commands_rejected;
+  result.latency.steps = result.steps;
+  result.latency.compute = summarize_ns(compute_ns);
+  result.latency.lateness = summarize_ns(lateness_ns);
+  result.latency.deadline_misses = counters.deadline_misses;
+  result.latency.overruns = counters.overruns;
+  result.latency.realtime_priority = counters.realtime_priority;
+  result.latency.memory_locked = counters.memory_locked;
+
+  std::vector<AssertionResult>& out = result.assertions;
+  {
+    AssertionResult a;
+    a.name = "run.steps";
+    a.measured = std::to_string(result.steps) + " steps";
+    a.limit = "== " + std::to_string(script.steps) + " steps";
+    a.passed = result.steps == script.steps;
+    out.push_back(a);
+  }
+  if (result.commands_rejected) {
+    AssertionResult a;
+    a.name = "run.commands_rejected";
+    a.measured = std::to_string(result.commands_rejected);
+    a.limit = "== 0";
+    a.passed = false;
+    out.push_back(a);
+  }
+  const bool fast = run_options.pacing == Pacing::Fast;
+  const LatencyLimits& lat = script.latency;
+  check_upper(out, "latency.compute_p50_us", "", lat.compute_p50_us, result.latency.compute.p50_us, "us");
+  check_upper(out, "latency.compute_p99_us", "", lat.compute_p99_us, result.latency.compute.p99_us, "us");
+  check_upper(out, "latency.compute_max_us", "", lat.compute_max_us, result.latency.compute.max_us, "us");
+  check_upper(out, "latency.lateness_p50_us", "", lat.lateness_p50_us, result.latency.lateness.p50_us, "us", fast);
+  check_upper(out, "latency.lateness_p99_us", "", lat.lateness_p99_us, result.latency.lateness.p99_us, "us", fast);
+  check_upper(out, "latency.lateness_max_us", "", lat.lateness_max_us, result.latency.lateness.max_us, "us", fast);
+  if (lat.deadline_misses) {
+    check_upper(out, "latency.deadline_misses", "", static_cast<double>(*lat.deadline_misses),
+                static_cast<double>(result.latency.deadline_misses), "steps", fast);
+  }
+  if (script.stability.finite) {
+    AssertionResult a;
+    a.name = "stability.finite";
+    a.measured = result.finite ? "finite" : "not finite from step " + std::to_string(*result.first_non_finite_step);
+    a.limit = "finite";
+    a.passed = result.finite;
+    out.push_back(a);
+  }
+  check_upper(out, "stability.energy_max_j", "", script.stability.energy_max_j, result.max_energy_j, "J", false,
+              result.max_energy_step);
+  check_upper(out, "stability.speed_max_m_s", "", script.stability.speed_max_m_s, result.max_speed_m_s, "m/s", false,
+              result.max_speed_step);
+  check_upper(out, "contact.max_penetration_m", "", script.contact.max_penetration_m, result.max_penetration_m, "m",
+              false, result.max_penetration_step);
+  for (std::size_t i = 0; i < script.gaps.size(); ++i) {
+    const GapLimit& g = script.gaps[i];
+    const std::string name = "gap[" + g.a + ", " + g.b + "]";
+    if (gaps[i].samples == 0) {
+      AssertionResult a;
+      a.name = name;
+      a.where = g.where;
+      a.measured = "no samples (snapshots dropped or the run ended early)";
+      a.limit = "at least one sample";
+      a.passed = false;
+      out.push_back(a);
+      continue;
+    }
+    check_upper(out, name + ".max_gap_m", g.where, g.max_gap_m, gaps[i].max_gap_m, "m", false, gaps[i].worst_gap_step);
+    check_upper(out, name + ".max_penetration_m", g.where, g.max_penetration_m, gaps[i].max_penetration_m, "m", false,
+                gaps[i].worst_penetration_step);
+  }
+  check_upper(out, "force.max_n", "", script.force.max_n, result.peak_force_n, "N", false, result.peak_force_step);
+  if (script.force.peak_min_n) {
+    AssertionResult a;
+    a.name = "force.peak_min_n";
+    a.measured = number(result.peak_force_n, "N");
+    a.limit = ">= " + number(*script.force.peak_min_n, "N");
+    a.passed = result.peak_force_n >= *script.force.peak_min_n;
+    out.push_back(a);
+  }
+  if (!script.hashes.empty()) {
+    AssertionResult a;
+    a.name = "determinism.state_hash";
+    std::size_t checked = 0;
+    std::optional<std::uint64_t> last_equal;
+    for (const HashCheck& h : script.hashes) {
+      const auto it = std::find_if(result.hashes.begin(), result.hashes.end(),
+                                   [&](const auto& p) { return p.first == h.step; });
+      if (it == result.hashes.end()) continue;
+      ++checked;
+      if (it->second == h.value) {
+        last_equal = h.step;
+        continue;
+      }
+      // The first check that differs: the run diverged after the last equal one.
+      a.passed = false;
+      a.where = h.where;
+      a.measured = "diverged: state hash at step " + std::to_string(h.step) + " is " + hex(it->second) + " (" +
+                   (last_equal ? "last equal at step " + std::to_string(*last_equal) : "no earlier check") + ")";
+      a.limit = "== " + hex(h.value);
+      break;
+    }
+    if (a.passed) {
+      a.measured = std::to_string(checked) + " of " + std::to_string(script.hashes.size()) + " hashes equal";
+      a.limit = "all equal";
+      a.passed = checked == script.hashes.size();
+    }
+    out.push_back(a);
+  }
+  return result;
+}
+
+std::string format_replay_result(const ReplayScript& script, const ReplayResult& result) {
+  std::ostringstream s;
+  const LatencyReport& l = result.latency;
+  s << script.path << ": " << result.steps << " steps, "
+    << (result.pacing == Pacing::Fast ? "fast" : "real time") << "\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  compute  us: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f\n", l.compute.p50_us,
+                l.compute.p99_us, l.compute.p999_us, l.compute.max_us);
+  s << line;
+  if (result.pacing == Pacing::RealTime) {
+    std::snprintf(line, sizeof line, "  lateness us: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f; deadline misses %llu\n",
+                  l.lateness.p50_us, l.lateness.p99_us, l.lateness.p999_us, l.lateness.max_us,
+                  static_cast<unsigned long long>(l.deadline_misses));
+    s << line;
+  }
+  std::size_t failed = 0;
+  for (const AssertionResult& a : result.assertions) {
+    const char* verdict = a.skipped ? "SKIP" : a.passed ? "PASS" : "FAIL";
+    if (!a.passed) ++failed;
+    s << verdict << ' ' << a.name << ": " << a.measured << " (limit " << a.limit << ")";
+    if (a.skipped) s << " [real time only]";
+    if (!a.passed && !a.where.empty()) s << " at " << a.where;
+    s << "\n";
+  }
+  s << (failed ? "FAILED: " + std::to_string(failed) + " of " : "passed: all ")
+    << result.assertions.size() << " assertions" << "\n";
+  return s.str();
+}
+
+std::string replay_result_json(const ReplayScript& script, const ReplayResult& result) {
+  using nlohmann::json;
+  auto dist = [](const TimeDistribution& d) {
+    return json{{"p50_us", d.p50_us}, {"p99_us", d.p99_us}, {"p99_9_us", d.p999_us}, {"max_us", d.max_us}};
+  };
+  json j;
+  j["script"] = script.path;
+  j["scene"] = script.scene_origin;
+  j["mode"] = result.pacing == Pacing::Fast ? "fast" : "realtime";
+  j["steps"] = result.steps;
+  j["passed"] = result.passed();
+  j["latency"] = {{"compute", dist(result.latency.compute)},
+                  {"lateness", dist(result.latency.lateness)},
+                  {"deadline_misses", result.latency.deadline_misses},
+                  {"overruns", result.latency.overruns},
+                  {"sched_fifo", result.latency.realtime_priority},
+                  {"memory_locked", result.latency.memory_locked}};
+  j["finite"] = result.finite;
+  j["max_energy_j"] = result.max_energy_j;
+  j["max_speed_m_s"] = result.max_speed_m_s;
+  j["max_penetration_m"] = result.max_penetration_m;
+  j["peak_force_n"] = result.peak_force_n;
+  j["final_state_hash"] = hex(result.final_hash);
+  json assertions = json::array();
+  for (const AssertionResult& a : result.assertions) {
+    assertions.push_back({{"name", a.name},
+                          {"where", a.where},
+                          {"result", a.skipped ? "skip" : a.passed ? "pass" : "fail"},
+                          {"measured", a.measured},
+                          {"limit", a.limit}});
+  }
+  j["assertions"] = assertions;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace ffd

@@ -1,0 +1,428 @@
+// Replay scripts -> ReplayScript: strict like the scene loader (unknown keys, wrong types,
+// out-of-range values and events after the end are errors naming file:line:col and field).
+#include "ffd/replay_script.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+#include "ffd/scene_loader.h"
+
+namespace ffd {
+namespace {
+
+const std::vector<std::string_view> kRootKeys = {"format", "version", "description", "scene", "steps",
+                                                 "duration_ms", "event", "probe_path", "drag_path",
+                                                 "assert", "record"};
+const std::vector<std::string_view> kEventKeys = {"at_step", "at_ms", "probe", "grab", "drag", "release",
+                                                  "alpha", "beta", "gravity", "stiffness", "budget_us",
+                                                  "pause_ms", "resume", "single_step", "reset"};
+const std::vector<std::string_view> kGrabKeys = {"object", "point", "cell", "local", "target"};
+const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
+const std::vector<std::string_view> kPathKeys = {"interpolation", "keyframes"};
+const std::vector<std::string_view> kKeyframeKeys = {"at_step", "at_ms", "position"};
+const std::vector<std::string_view> kInterpolations = {"linear", "smooth", "step"};
+const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "force", "hash"};
+const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p99_us", "compute_max_us",
+                                                    "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
+                                                    "deadline_misses"};
+const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "speed_max_m_s"};
+const std::vector<std::string_view> kContactKeys = {"max_penetration_m"};
+const std::vector<std::string_view> kGapKeys = {"objects", "max_gap_m", "max_penetration_m", "from_step",
+                                                "from_ms", "to_step", "to_ms", "every_steps", "every_ms"};
+const std::vector<std::string_view> kForceKeys = {"max_n", "peak_min_n"};
+const std::vector<std::string_view> kHashKeys = {"step", "value"};
+const std::vector<std::string_view> kRecordKeys = {"hash_every"};
+
+constexpr Bounds kPositive{0.0, kInf, true, false};
+constexpr Bounds kNonNegative{0.0, kInf, false, false};
+constexpr Bounds kUnit{0.0, 1.0, false, false};
+constexpr std::int64_t kMaxSteps = std::int64_t{1} << 40;
+
+std::string location(const std::string& origin, const toml::source_region& where) {
+  return origin + ":" + std::to_string(where.begin.line) + ":" + std::to_string(where.begin.column);
+}
+
+class ScriptReader {
+ public:
+  ScriptReader(const std::string& origin, const std::string& base_dir) : origin_(origin), base_dir_(base_dir) {}
+
+  LoadedReplay read(const toml::table& root_table) {
+    const TableReader root(origin_, root_table, "", kRootKeys);
+    LoadedReplay out{ReplayScript{}, Model{}};
+    ReplayScript& script = out.script;
+    script.path = origin_;
+    if (const auto format = root.string("format"); format && *format != "ffdsim-replay")
+      root.fail_at("format", "expected \"ffdsim-replay\" (got " + in_quotes(*format) + ")");
+    if (!root.has("version")) root.fail_missing("version", " (this program reads version = 1)");
+    const std::int64_t version = root.integer("version", 0, 1, std::numeric_limits<std::int64_t>::max());
+    if (version != kReplayFormatVersion)
+      root.fail_at("version", "unsupported version " + std::to_string(version) + "; this program reads version " +
+                                  std::to_string(kReplayFormatVersion));
+    script.description = root.string("description").value_or("");
+
+    read_scene(root, script);
+    std::vector<std::string> log;
+    try {
+      out.model = compile(script.scene, log);
+    } catch (const CompileError& e) {
+      root.fail_at("scene", std::string("the scene does not compile: ") + e.what());
+    }
+    model_ = &out.model;
+    dt_ms_ = out.model.settings.dt * 1000.0;
+
+    if (root.has("steps") && root.has("duration_ms")) root.fail_at("duration_ms", "give either 'steps' or 'duration_ms', not both");
+    if (root.has("steps")) script.steps = static_cast<std::uint64_t>(root.integer("steps", 0, 1, kMaxSteps));
+    else if (root.has("duration_ms")) script.steps = ms_to_steps(root, "duration_ms", Bounds{0.0, kInf, true, false});
+    else root.fail_missing("steps", " (give 'steps' or 'duration_ms': how long the replay runs)");
+    if (script.steps == 0) root.fail_at("duration_ms", "is shorter than one step");
+    steps_ = script.steps;
+
+    const auto events = array_of_tables(root, "event");
+    for (std::size_t i = 0; i < events.size(); ++i) read_event(*events[i], "event[" + std::to_string(i) + "]", script);
+    read_paths(root, "probe_path", CommandKind::ProbePose, script);
+    read_paths(root, "drag_path", CommandKind::Drag, script);
+    std::stable_sort(script.commands.begin(), script.commands.end(),
+                     [](const Command& a, const Command& b) { return a.step < b.step; });
+
+    if (const toml::table* record = root.subtable("record")) {
+      const TableReader r(origin_, *record, "record", kRecordKeys);
+      script.hash_every = static_cast<std::uint32_t>(r.integer("hash_every", 0, 1, 1'000'000));
+    }
+    if (const toml::table* assertions = root.subtable("assert")) read_assertions(*assertions, script);
+    return out;
+  }
+
+ private:
+  void read_scene(const TableReader& root, ReplayScript& script) {
+    const toml::node* node = root.find("scene");
+    if (!node) root.fail_missing("scene", " (a scene file path, or an inline [scene] table)");
+    if (const toml::table* inline_scene = node->as_table()) {
+      script.scene_origin = origin_;
+      script.scene = read_scene_table(*inline_scene, origin_, base_dir_);
+      script.scene.name = std::filesystem::path(origin_).stem().string();
+      return;
+    }
+    const auto path = root.string("scene");
+    if (!path) root.fail_at("scene", "expected a path or a table");
+    std::filesystem::path resolved(*path);
+    if (resolved.is_relative() && !base_dir_.empty()) resolved = std::filesystem::path(base_dir_) / resolved;
+    resolved = resolved.lexically_normal();
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(resolved, error))
+      root.fail_at("scene", "cannot find scene file " + in_quotes(resolved.string()) +
+                                " (scene paths are relative to the script's folder)");
+    script.scene_origin = resolved.string();
+    script.scene = load_scene_file(resolved.string());
+  }
+
+  // A time given as "<prefix>_step" or "<prefix>_ms" (exactly one), in steps.
+  std::optional<std::uint64_t> time_of(const TableReader& t, const std::string& prefix, bool required) const {
+    const std::string step_key = prefix + "_step", ms_key = prefix + "_ms";
+    const bool has_step = t.has(step_key), has_ms = t.has(ms_key);
+    if (has_step && has_ms) t.fail_at(ms_key, "give either '" + step_key + "' or '" + ms_key + "', not both");
+    if (has_step) return static_cast<std::uint64_t>(t.integer(step_key, 0, 0, kMaxSteps));
+    if (has_ms) return ms_to_steps(t, ms_key, kNonNegative);
+    if (required) t.fail_missing(step_key, " (or '" + ms_key + "')");
+    return std::nullopt;
+  }
+
+  std::uint64_t ms_to_steps(const TableReader& t, const std::string& key, const Bounds& bounds) const {
+    const double ms = t.number(key, 0.0, bounds);
+    const double steps = std::round(ms / dt_ms_);
+    if (steps > static_cast<double>(kMaxSteps)) t.fail_at(key, "is too large");
+    return static_cast<std::uint64_t>(steps);
+  }
+
+  void require_effect(const TableReader& t, std::string_view key, Effect effect) const {
+    if (!has(model_->settings.effects, effect))
+      t.fail_at(key, std::string("the scene does not list the \"") + effect_name(effect) + "\" effect");
+  }
+
+  Index object_index(const TableReader& t, std::string_view key) const {
+    const auto name = t.string(key);
+    if (!name) t.fail_missing(key);
+    return find_object(t, key, *name);
+  }
+
+  void read_event(const toml::table& table, const std::string& path, ReplayScript& script) {
+    const TableReader e(origin_, table, path, kEventKeys);
+    const std::uint64_t step = *time_of(e, "at", true);
+    check_within_run(e, e.has("at_step") ? "at_step" : "at_ms", step);
+    // Actions in the order they are written.
+    std::vector<std::pair<toml::source_position, std::string_view>> actions;
+    for (auto&& [key, value] : table) {
+      (void)value;
+      if (key.str() != "at_step" && key.str() != "at_ms") actions.emplace_back(key.source().begin, key.str());
+    }
+    if (actions.empty()) e.fail_here(path, "an event needs an action (e.g. alpha = 0.5, probe = [x, y, z], grab = {...})");
+    std::sort(actions.begin(), actions.end(), [](const auto& a, const auto& b) {
+      return a.first.line != b.first.line ? a.first.line < b.first.line : a.first.column < b.first.column;
+    });
+    for (const auto& [where, key] : actions) {
+      (void)where;
+      Command c;
+      c.step = step;
+      if (key == "probe") {
+        require_effect(e, key, Effect::Probe);
+        c.kind = CommandKind::ProbePose;
+        c.vector = e.vec3(key, Vec3::Zero());
+      } else if (key == "grab") {
+        require_effect(e, key, Effect::Grab);
+        c = read_grab(e, step);
+        if (const toml::table* g = e.subtable("grab"); g && g->contains("target")) {
+          // The grab starts at the point; a target is a drag in the same step.
+          script.commands.push_back(c);
+          c.kind = CommandKind::Drag;
+          c.vector = TableReader(origin_, *g, e.field("grab"), kGrabKeys).vec3("target", Vec3::Zero());
+        }
+      } else if (key == "drag") {
+        require_effect(e, key, Effect::Grab);
+        c.kind = CommandKind::Drag;
+        c.vector = e.vec3(key, Vec3::Zero());
+      } else if (key == "alpha" || key == "beta") {
+        c.kind = key == "alpha" ? CommandKind::SetAlpha : CommandKind::SetBeta;
+        c.value = e.number(key, 0.0, kUnit);
+      } else if (key == "gravity") {
+        c.kind = CommandKind::SetGravity;
+        c.vector = e.vec3(key, Vec3::Zero());
+      } else if (key == "stiffness") {
+        c = read_stiffness(e, step);
+      } else if (key == "budget_us") {
+        c.kind = CommandKind::SetBudget;
+        c.value = e.number(key, 0.0, kPositive);
+      } else if (key == "pause_ms") {
+        c.kind = CommandKind::Pause;
+        c.value = std::round(e.number(key, 0.0, kPositive) / dt_ms_);  // ticks of the loop
+        if (c.value < 1.0) e.fail_at(key, "is shorter than one tick of the loop");
+      } else {  // release, resume, single_step, reset: flags
+        if (!e.boolean(key, false)) e.fail_at(key, "write " + std::string(key) + " = true, or leave it out");
+        c.kind = key == "release" ? CommandKind::Release
+                 : key == "resume" ? CommandKind::Resume
+                 : key == "single_step" ? CommandKind::SingleStep
+                                        : CommandKind::Reset;
+        if (c.kind == CommandKind::Release) require_effect(e, key, Effect::Grab);
+      }
+      script.commands.push_back(c);
+    }
+  }
+
+  Command read_grab(const TableReader& e, std::uint64_t step) const {
+    const toml::table* table = e.subtable("grab");
+    if (!table) e.fail_at("grab", "expected a table { object = \"name\", point = [x, y, z] }");
+    const TableReader g(origin_, *table, e.field("grab"), kGrabKeys);
+    Command c;
+    c.step = step;
+    c.kind = CommandKind::Grab;
+    const Index object = object_index(g, "object");
+    const ObjectModel& o = model_->objects[object];
+    if (g.has("point") == (g.has("cell") || g.has("local")))
+      g.fail_here(g.path(), "give either 'point' (a position in m) or 'cell' and 'local', not both and not neither");
+    if (g.has("point")) {
+      // The surface vertex nearest to the point, given in the object's own frame (as its
+      // mesh is, scaled), so that it names the same spot whenever the grab happens.
+      const Vec3 point = g.vec3("point", Vec3::Zero());
+      double best = kInf;
+      for (std::size_t v = 0; v < o.surface.vertices.size(); ++v) {
+        const double d = (o.surface.vertices[v] - point).squaredNorm();
+        if (d < best) {
+          best = d;
+          c.cell = o.vertex_cell[v];
+          c.local = o.vertex_local[v];
+        }
+      }
+    } else {
+      if (!g.has("cell") || !g.has("local")) g.fail_here(g.path(), "'cell' and 'local' go together");
+      const std::int64_t cells = static_cast<std::int64_t>(o.cell_end - o.cell_begin);
+      c.cell = o.cell_begin + static_cast<Index>(g.integer("cell", 0, 0, cells - 1));
+      c.local = g.vec3("local", Vec3::Zero(), kUnit);
+    }
+    if (g.has("target")) g.vec3("target", Vec3::Zero());  // checked here, used as a Drag
+    return c;
+  }
+
+  Command read_stiffness(const TableReader& e, std::uint64_t step) const {
+    const toml::table* table = e.subtable("stiffness");
+    if (!table) e.fail_at("stiffness", "expected a table { object = \"name\", value = ... }");
+    const TableReader s(origin_, *table, e.field("stiffness"), kStiffnessKeys);
+    Command c;
+    c.step = step;
+    c.kind = CommandKind::SetStiffness;
+    c.object = object_index(s, "object");
+    const bool mass_spring = model_->objects[c.object].dynamics == DynamicsKind::MassSpring;
+    if (!s.has("value")) s.fail_missing("value", mass_spring ? " (N/m per spring)" : " (pull fraction in (0, 1])");
+    c.value = s.number("value", 0.0, mass_spring ? kPositive : Bounds{0.0, 1.0, true, false});
+    return c;
+  }
+
+  void check_within_run(const TableReader& t, std::string_view key, std::uint64_t step) const {
+    if (step >= steps_)
+      t.fail_at(key, "is at step " + std::to_string(step) + ", after the end of the run (" + std::to_string(steps_) +
+                         " steps)");
+  }
+
+  // Keyframed probe or drag paths: one command per step from the first keyframe to the last.
+  void read_paths(const TableReader& root, std::string_view key, CommandKind kind, ReplayScript& script) {
+    const auto paths = array_of_tables(root, key);
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> spans;
+    for (std::size_t p = 0; p < paths.size(); ++p) {
+      const std::string path = std::string(key) + "[" + std::to_string(p) + "]";
+      const TableReader t(origin_, *paths[p], path, kPathKeys);
+      require_effect(root, key, kind == CommandKind::ProbePose ? Effect::Probe : Effect::Grab);
+      const std::string interpolation = t.string("interpolation").value_or("linear");
+      if (std::find(kInterpolations.begin(), kInterpolations.end(), interpolation) == kInterpolations.end())
+        t.fail_at("interpolation", "unknown interpolation " + in_quotes(interpolation) + " (valid: " + join(kInterpolations) + ")");
+      const toml::node* frames = t.find("keyframes");
+      if (!frames) t.fail_missing("keyframes", " (an array of { at_ms = ..., position = [x, y, z] })");
+      const toml::array* array = frames->as_array();
+      if (!array || array->empty()) t.fail_at("keyframes", "expected a non-empty array of tables");
+      std::vector<std::pair<std::uint64_t, Vec3>> keys;
+      for (std::size_t i = 0; i < array->size(); ++i) {
+        const toml::table* frame = array->get(i)->as_table();
+        const std::string field = t.field("keyframes") + "[" + std::to_string(i) + "]";
+        if (!frame) t.fail(array->get(i)->source(), field, "expected a table { at_ms = ..., position = [x, y, z] }");
+        const TableReader k(origin_, *frame, field, kKeyframeKeys);
+        const std::uint64_t step = *time_of(k, "at", true);
+        check_within_run(k, k.has("at_step") ? "at_step" : "at_ms", step);
+        if (!k.has("position")) k.fail_missing("position");
+        if (!keys.empty() && step <= keys.back().first)
+          k.fail_here(field, "keyframes must be in increasing time (step " + std::to_string(step) +
+                                 " is not after step " + std::to_string(keys.back().first) + ")");
+        keys.emplace_back(step, k.vec3("position", Vec3::Zero()));
+      }
+      const std::pair<std::uint64_t, std::uint64_t> span{keys.front().first, keys.back().first};
+      for (std::size_t q = 0; q < spans.size(); ++q)
+        if (span.first <= spans[q].second && spans[q].first <= span.second)
+          t.fail_here(path, "overlaps " + std::string(key) + "[" + std::to_string(q) + "] (steps " +
+                                std::to_string(spans[q].first) + " to " + std::to_string(spans[q].second) + ")");
+      spans.push_back(span);
+      std::size_t segment = 0;
+      for (std::uint64_t s = span.first; s <= span.second; ++s) {
+        while (segment + 1 < keys.size() && keys[segment + 1].first <= s) ++segment;
+        Vec3 position = keys[segment].second;
+        if (segment + 1 < keys.size() && interpolation != "step") {
+          const double u = static_cast<double>(s - keys[segment].first) /
+                           static_cast<double>(keys[segment + 1].first - keys[segment].first);
+          const double w = interpolation == "smooth" ? u * u * (3.0 - 2.0 * u) : u;  // smoothstep
+          position = (1.0 - w) * keys[segment].second + w * keys[segment + 1].second;
+        }
+        Command c;
+        c.step = s;
+        c.kind = kind;
+        c.vector = position;
+        script.commands.push_back(c);
+      }
+    }
+  }
+
+  void read_assertions(const toml::table& table, ReplayScript& script) const {
+    const TableReader a(origin_, table, "assert", kAssertKeys);
+    auto optional_number = [](const TableReader& t, std::string_view key, const Bounds& bounds) -> std::optional<double> {
+      if (!t.has(key)) return std::nullopt;
+      return t.number(key, 0.0, bounds);
+    };
+    if (const toml::table* latency = a.subtable("latency")) {
+      const TableReader l(origin_, *latency, "assert.latency", kLatencyKeys);
+      LatencyLimits& lim = script.latency;
+      lim.compute_p50_us = optional_number(l, "compute_p50_us", kPositive);
+      lim.compute_p99_us = optional_number(l, "compute_p99_us", kPositive);
+      lim.compute_max_us = optional_number(l, "compute_max_us", kPositive);
+      lim.lateness_p50_us = optional_number(l, "lateness_p50_us", kNonNegative);
+      lim.lateness_p99_us = optional_number(l, "lateness_p99_us", kNonNegative);
+      lim.lateness_max_us = optional_number(l, "lateness_max_us", kNonNegative);
+      if (l.has("deadline_misses"))
+        lim.deadline_misses = static_cast<std::uint64_t>(l.integer("deadline_misses", 0, 0, kMaxSteps));
+    }
+    if (const toml::table* stability = a.subtable("stability")) {
+      const TableReader s(origin_, *stability, "assert.stability", kStabilityKeys);
+      script.stability.finite = s.boolean("finite", false);
+      script.stability.energy_max_j = optional_number(s, "energy_max_j", kAnyValue);
+      script.stability.speed_max_m_s = optional_number(s, "speed_max_m_s", kPositive);
+    }
+    if (const toml::table* contact = a.subtable("contact")) {
+      const TableReader c(origin_, *contact, "assert.contact", kContactKeys);
+      script.contact.max_penetration_m = optional_number(c, "max_penetration_m", kNonNegative);
+    }
+    if (const toml::table* force = a.subtable("force")) {
+      const TableReader f(origin_, *force, "assert.force", kForceKeys);
+      if (!has(model_->settings.effects, Effect::Probe))
+        a.fail_at("force", "force assertions need the \"probe\" effect in the scene");
+      script.force.max_n = optional_number(f, "max_n", kPositive);
+      script.force.peak_min_n = optional_number(f, "peak_min_n", kNonNegative);
+    }
+    const auto gaps = array_of_tables(a, "gap");
+    for (std::size_t i = 0; i < gaps.size(); ++i) {
+      const std::string path = "assert.gap[" + std::to_string(i) + "]";
+      const TableReader g(origin_, *gaps[i], path, kGapKeys);
+      GapLimit gap;
+      gap.where = location(origin_, gaps[i]->source());
+      const toml::node* objects = g.find("objects");
+      if (!objects) g.fail_missing("objects", " (two object names)");
+      const toml::array* names = objects->as_array();
+      if (!names || names->size() != 2 || !names->get(0)->is_string() || !names->get(1)->is_string())
+        g.fail_at("objects", "expected two object names [\"a\", \"b\"]");
+      gap.a = names->get(0)->as_string()->get();
+      gap.b = names->get(1)->as_string()->get();
+      gap.object_a = find_object(g, "objects", gap.a);
+      gap.object_b = find_object(g, "objects", gap.b);
+      if (gap.object_a == gap.object_b) g.fail_at("objects", "names the same object twice");
+      gap.max_gap_m = optional_number(g, "max_gap_m", kNonNegative);
+      gap.max_penetration_m = optional_number(g, "max_penetration_m", kNonNegative);
+      if (!gap.max_gap_m && !gap.max_penetration_m) g.fail_here(path, "give 'max_gap_m' and/or 'max_penetration_m'");
+      gap.from_step = time_of(g, "from", false).value_or(0);
+      gap.to_step = time_of(g, "to", false).value_or(script.steps);
+      if (gap.to_step > script.steps) g.fail_here(path, "'to' is after the end of the run");
+      if (gap.from_step > gap.to_step) g.fail_here(path, "'from' is after 'to'");
+      gap.every_steps = time_of(g, "every", false).value_or(10);
+      if (gap.every_steps == 0) g.fail_here(path, "'every' must be at least one step");
+      script.gaps.push_back(gap);
+    }
+    const auto hashes = array_of_tables(a, "hash");
+    for (std::size_t i = 0; i < hashes.size(); ++i) {
+      const TableReader h(origin_, *hashes[i], "assert.hash[" + std::to_string(i) + "]", kHashKeys);
+      HashCheck check;
+      check.where = location(origin_, hashes[i]->source());
+      if (!h.has("step")) h.fail_missing("step");
+      check.step = static_cast<std::uint64_t>(h.integer("step", 0, 1, kMaxSteps));
+      if (check.step > script.steps) h.fail_at("step", "is after the end of the run (" + std::to_string(script.steps) + " steps)");
+      const auto value = h.string("value");
+      if (!value) h.fail_missing("value", " (16 hexadecimal digits, as printed by ffdsim)");
+      if (value->size() != 16 || value->find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+        h.fail_at("value", "expected 16 hexadecimal digits (got " + in_quotes(*value) + ")");
+      check.value = std::stoull(*value, nullptr, 16);
+      script.hashes.push_back(check);
+    }
+    std::stable_sort(script.hashes.begin(), script.hashes.end(),
+                     [](const HashCheck& x, const HashCheck& y) { return x.step < y.step; });
+  }
+
+  Index find_object(const TableReader& t, std::string_view key, const std::string& name) const {
+    std::vector<std::string_view> names;
+    for (std::size_t i = 0; i < model_->objects.size(); ++i) {
+      if (model_->objects[i].name == name) return static_cast<Index>(i);
+      names.emplace_back(model_->objects[i].name);
+    }
+    std::string problem = "no object named " + in_quotes(name) + " in the scene";
+    if (const auto suggestion = closest_match(name, names)) problem += "; did you mean " + in_quotes(*suggestion) + "?";
+    t.fail_at(key, problem + " (objects: " + join(names) + ")");
+  }
+
+  const std::string& origin_;
+  const std::string& base_dir_;
+  const Model* model_ = nullptr;
+  double dt_ms_ = 1.0;
+  std::uint64_t steps_ = 0;
+};
+
+}  // namespace
+
+LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir) {
+  return ScriptReader(origin, base_dir).read(parse_toml(text, origin));
+}
+
+LoadedReplay load_replay_file(const std::string& path) {
+  return parse_replay(read_text_file(path, "replay script"), path, std::filesystem::path(path).parent_path().string());
+}
+
+}  // namespace ffd

@@ -1,0 +1,183 @@
+// Replay scripts and recordings: malformed scripts name file, line, column and field; a
+// recorded session replays bit for bit in fast and in real-time mode; a divergence is
+// reported with the step it was found at.
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "ffd/physics_loop.h"
+#include "ffd/recording.h"
+#include "ffd/replay_runner.h"
+#include "ffd/replay_script.h"
+
+using namespace ffd;
+using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
+
+namespace {
+
+const std::string kScene = FFDSIM_TEST_DATA_DIR "/scenes/probe_and_grab.toml";
+
+std::string script_with(const std::string& body) {
+  return "version = 1\nscene = \"" + kScene + "\"\nsteps = 200\n" + body;
+}
+
+LoadedReplay parse(const std::string& text) { return parse_replay(text, "test.toml", ""); }
+
+std::string temporary_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("ffdsim_" + name)).string();
+}
+
+}  // namespace
+
+TEST_CASE("Replay scripts: a well-formed script resolves times, names and paths") {
+  const LoadedReplay replay = parse(script_with(R"(
+[[event]]
+at_ms = 20
+alpha = 0.5
+beta = 0.25
+
+[[event]]
+at_step = 30
+grab = { object = "high", point = [0.05, 0.05, 0.05], target = [0.1, 0.3, 0.0] }
+
+[[probe_path]]
+interpolation = "linear"
+keyframes = [ { at_step = 100, position = [0.0, 0.4, 0.0] }, { at_step = 110, position = [0.0, 0.3, 0.0] } ]
+
+[assert.stability]
+finite = true
+[[assert.hash]]
+step = 200
+value = "0123456789abcdef"
+)"));
+  const ReplayScript& s = replay.script;
+  CHECK(s.steps == 200);
+  REQUIRE(s.commands.size() == 2 + 2 + 11);
+  CHECK(s.commands[0].kind == CommandKind::SetAlpha);
+  CHECK(s.commands[0].step == 20);
+  CHECK(s.commands[1].kind == CommandKind::SetBeta);
+  CHECK(s.commands[2].kind == CommandKind::Grab);
+  CHECK(replay.model.cell_object[s.commands[2].cell] == 1);
+  CHECK(s.commands[3].kind == CommandKind::Drag);  // the grab's target
+  CHECK(s.commands[3].vector == Vec3(0.1, 0.3, 0.0));
+  CHECK(s.commands[4].step == 100);
+  CHECK(s.commands[9].vector.y() == Approx(0.35));  // halfway along the linear path
+  CHECK(s.commands.back().step == 110);
+  REQUIRE(s.hashes.size() == 1);
+  CHECK(s.hashes[0].value == 0x0123456789abcdefull);
+}
+
+TEST_CASE("Replay scripts: malformed scripts name the file, line, column and field") {
+  struct Case {
+    const char* what;
+    std::string text;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"syntax", "version = 1\nscene = \n", "test.toml:2:9: TOML syntax error"},
+      {"no version", "scene = \"" + kScene + "\"\nsteps = 5\n", "test.toml:1:1: version: missing required key"},
+      {"bad version", "version = 2\nscene = \"" + kScene + "\"\nsteps = 5\n", "test.toml:1:11: version: unsupported version 2"},
+      {"missing scene file", "version = 1\nscene = \"nowhere.toml\"\nsteps = 5\n", "test.toml:2:9: scene: cannot find scene file"},
+      {"unknown key", script_with("[[event]]\nat_ms = 5\nalpah = 0.5\n"), "test.toml:6:1: event[0].alpah: unknown key 'alpah'; did you mean 'alpha'?"},
+      {"out of range", script_with("[[event]]\nat_ms = 5\nalpha = 1.5\n"), "test.toml:6:9: event[0].alpha: must be in [0, 1] (got 1.5)"},
+      {"after the end", script_with("[[event]]\nat_ms = 500\nalpha = 0.5\n"), "test.toml:5:9: event[0].at_ms: is at step 500, after the end of the run (200 steps)"},
+      {"no action", script_with("[[event]]\nat_ms = 5\n"), "test.toml:4:1: event[0]: an event needs an action"},
+      {"unknown object", script_with("[[event]]\nat_ms = 5\nstiffness = { object = \"hihg\", value = 10.0 }\n"),
+       "test.toml:6:24: event[0].stiffness.object: no object named 'hihg' in the scene; did you mean 'high'?"},
+      {"keyframes out of order", script_with("[[probe_path]]\nkeyframes = [ { at_step = 10, position = [0, 0, 0] }, { at_step = 5, position = [0, 0, 0] } ]\n"),
+       "test.toml:5:55: probe_path[0].keyframes[1]: keyframes must be in increasing time"},
+      {"bad hash", script_with("[[assert.hash]]\nstep = 10\nvalue = \"xyz\"\n"), "test.toml:6:9: assert.hash[0].value: expected 16 hexadecimal digits"},
+      {"both times", script_with("[[event]]\nat_ms = 5\nat_step = 5\nreset = true\n"), "test.toml:5:9: event[0].at_ms: give either 'at_step' or 'at_ms', not both"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.what);
+    REQUIRE_THROWS_WITH(parse(c.text), StartsWith(c.message));
+  }
+}
+
+TEST_CASE("Replay scripts: a missing file is named") {
+  REQUIRE_THROWS_WITH(load_replay_file("/nonexistent/poke.toml"), StartsWith("/nonexistent/poke.toml: cannot open replay script"));
+}
+
+TEST_CASE("Replay: a recorded session replays bit for bit, fast and in real time") {
+  const LoadedReplay scene_only = parse(script_with(""));
+  const Model& model = scene_only.model;
+  // A "user": probe poses and a grab sent while the loop runs in real time, stamped by the
+  // loop with the step they applied at.
+  LoopOptions options;
+  options.hash_every = 25;
+  options.lock_memory = false;
+  options.stop_at_step = 600;
+  PhysicsLoop loop(model, initial_state(model), options);
+  loop.start();
+  Recording recording;
+  recording.scene_path = kScene;
+  recording.hash_every = 25;
+  Telemetry t;
+  Command c;
+  for (int i = 0; !loop.finished(); ++i) {
+    Command pose;
+    pose.kind = CommandKind::ProbePose;
+    pose.vector = Vec3(0.02, 0.4 - 0.002 * i, 0.0);
+    loop.push(pose);
+    if (i == 30) {
+      Command grab;
+      grab.kind = CommandKind::Grab;
+      grab.cell = model.objects[0].cell_begin + 2;
+      grab.local = Vec3(0.25, 0.5, 0.75);
+      loop.push(grab);
+    }
+    while (loop.pop_telemetry(t)) {
+      recording.steps = t.step;
+      if (t.has_hash) recording.hashes.emplace_back(t.step, t.state_hash);
+    }
+    while (loop.pop_applied_command(c)) recording.commands.push_back(c);
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+  }
+  loop.join();
+  while (loop.pop_telemetry(t)) {
+    recording.steps = t.step;
+    if (t.has_hash) recording.hashes.emplace_back(t.step, t.state_hash);
+  }
+  while (loop.pop_applied_command(c)) recording.commands.push_back(c);
+  REQUIRE(recording.steps == 600);
+  REQUIRE(recording.commands.size() > 50);
+  REQUIRE(recording.hashes.size() == 24);
+
+  const std::string path = temporary_path("recording.toml");
+  write_recording(path, model, recording);
+  const LoadedReplay replay = load_replay_file(path);
+  REQUIRE(replay.script.commands.size() == recording.commands.size());
+  for (const Pacing pacing : {Pacing::Fast, Pacing::RealTime}) {
+    ReplayRunOptions run;
+    run.pacing = pacing;
+    const ReplayResult result = run_replay(replay, run);
+    INFO(format_replay_result(replay.script, result));
+    CHECK(result.passed());
+    CHECK(result.final_hash == recording.hashes.back().second);
+    CHECK_FALSE(result.first_divergence);
+  }
+
+  // One hash changed: the replay fails and names the step.
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  char wanted[64];
+  std::snprintf(wanted, sizeof wanted, "step = 300\nvalue = \"%016llx\"",
+                static_cast<unsigned long long>(recording.hashes[11].second));
+  const std::size_t at = text.find(wanted);
+  REQUIRE(at != std::string::npos);
+  text.replace(at + std::string("step = 300\nvalue = \"").size(), 16, "0000000000000bad");
+  const LoadedReplay tampered = parse_replay(text, "tampered.toml", "");
+  const ReplayResult result = run_replay(tampered, ReplayRunOptions{});
+  CHECK_FALSE(result.passed());
+  REQUIRE(result.first_divergence);
+  CHECK(*result.first_divergence == 300);
+  CHECK_THAT(format_replay_result(tampered.script, result),
+             Contains("FAIL determinism.state_hash: diverged: state hash at step 300") &&
+                 Contains("last equal at step 275"));
+  std::filesystem::remove(path);
+}
