@@ -208,10 +208,16 @@ class ScriptReader {
     }
   }
 
+  // An inline table such as grab = { ... }, read strictly.
+  TableReader inline_table(const TableReader& e, std::string_view key, const std::vector<std::string_view>& keys,
+                           const std::string& shape) const {
+    const toml::table* table = e.subtable(key);
+    if (!table) e.fail_at(key, "expected a table " + shape);
+    return TableReader(origin_, *table, e.field(key), keys);
+  }
+
   Command read_grab(const TableReader& e, std::uint64_t step) const {
-    const toml::table* table = e.subtable("grab");
-    if (!table) e.fail_at("grab", "expected a table { object = \"name\", point = [x, y, z] }");
-    const TableReader g(origin_, *table, e.field("grab"), kGrabKeys);
+    const TableReader g = inline_table(e, "grab", kGrabKeys, "{ object = \"name\", point = [x, y, z] }");
     Command c;
     c.step = step;
     c.kind = CommandKind::Grab;
@@ -243,9 +249,7 @@ class ScriptReader {
   }
 
   Command read_stiffness(const TableReader& e, std::uint64_t step) const {
-    const toml::table* table = e.subtable("stiffness");
-    if (!table) e.fail_at("stiffness", "expected a table { object = \"name\", value = ... }");
-    const TableReader s(origin_, *table, e.field("stiffness"), kStiffnessKeys);
+    const TableReader s = inline_table(e, "stiffness", kStiffnessKeys, "{ object = \"name\", value = ... }");
     Command c;
     c.step = step;
     c.kind = CommandKind::SetStiffness;
