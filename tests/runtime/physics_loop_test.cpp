@@ -204,8 +204,18 @@ TEST_CASE("Physics loop: nothing is allocated on the physics thread") {
 // nothing near what waiting would cause.
 TEST_CASE("Physics loop: a reader stalled for 2 s costs no deadline and no telemetry") {
   const Model model = test::compile_quietly(loop_scene());
-  const LoopRun run = run_loop(model, {}, options_for(Pacing::RealTime, 3000), std::chrono::milliseconds(2000));
-  REQUIRE(run.telemetry.size() == 3000);
+  // The period and budget this build can keep: 1 ms, or 4x the slowest of 200 fast steps in
+  // a sanitizer build (whose steps are ~20x slower), so that only waiting could miss.
+  const LoopRun probe_run = run_loop(model, {}, options_for(Pacing::Fast, 200));
+  std::int64_t slowest_ns = 0;
+  for (const Telemetry& t : probe_run.telemetry) slowest_ns = std::max(slowest_ns, t.compute_ns);
+  const std::int64_t period_ns = std::max<std::int64_t>(1'000'000, 4 * slowest_ns);
+  const std::uint64_t steps = static_cast<std::uint64_t>(3'000'000'000 / period_ns);  // 3 s
+  LoopOptions options = options_for(Pacing::RealTime, steps);
+  options.period_ns = options.budget_ns = period_ns;
+  INFO("period and budget " << period_ns << " ns");
+  const LoopRun run = run_loop(model, {}, options, std::chrono::milliseconds(2000));
+  REQUIRE(run.telemetry.size() == steps);
   std::int64_t longest_compute_ns = 0;
   for (std::size_t i = 0; i < run.telemetry.size(); ++i) {
     REQUIRE(run.telemetry[i].step == i + 1);

@@ -2,6 +2,7 @@
 // Counts heap allocations made by threads that opt in: every operator new, and every malloc
 // from code linked into the test program (the moodycamel queues allocate with malloc). The
 // test executable links with -Wl,--wrap=malloc so that __wrap_malloc sees those calls.
+// Under ThreadSanitizer the sanitizer's allocation hook counts instead (see the .cpp).
 #include <cstdint>
 
 namespace ffd::test {

@@ -32,6 +32,7 @@ struct ReplayOptions {
   bool fast = false, realtime = false;
   std::string report_path;
   double period_us = 1000.0, budget_us = 1000.0;
+  bool skip_latency = false;
   bool quiet = false;
 };
 void register_replay(CLI::App& app, ReplayOptions& options);
