@@ -4,7 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libassimp-dev
-          libcli11-dev nlohmann-json3-dev catch2 libbenchmark-dev)
+          libcli11-dev nlohmann-json3-dev catch2 libbenchmark-dev libconcurrentqueue-dev
+          libreaderwriterqueue-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
