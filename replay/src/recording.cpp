@@ -71,9 +71,7 @@ std::string recording_text(const Model& model, const Recording& r) {
     s << "\n";
   }
   for (const auto& [step, hash] : r.hashes) {
-    char value[17];
-    std::snprintf(value, sizeof value, "%016llx", static_cast<unsigned long long>(hash));
-    s << "[[assert.hash]]\nstep = " << step << "\nvalue = \"" << value << "\"\n\n";
+    s << "[[assert.hash]]\nstep = " << step << "\nvalue = \"" << hash_hex(hash) << "\"\n\n";
   }
   return s.str();
 }

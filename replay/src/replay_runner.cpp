@@ -16,21 +16,6 @@
 
 namespace ffd {
 
-TimeDistribution summarize_ns(std::vector<std::int64_t>& ns) {
-  TimeDistribution d;
-  if (ns.empty()) return d;
-  std::sort(ns.begin(), ns.end());
-  auto at = [&](double pct) {
-    const std::size_t rank = static_cast<std::size_t>(std::ceil(pct / 100.0 * static_cast<double>(ns.size())));
-    return static_cast<double>(ns[std::min(ns.size() - 1, rank == 0 ? 0 : rank - 1)]) / 1000.0;
-  };
-  d.p50_us = at(50.0);
-  d.p99_us = at(99.0);
-  d.p999_us = at(99.9);
-  d.max_us = static_cast<double>(ns.back()) / 1000.0;
-  return d;
-}
-
 bool ReplayResult::passed() const {
   return std::all_of(assertions.begin(), assertions.end(), [](const AssertionResult& a) { return a.passed; });
 }
@@ -40,12 +25,6 @@ namespace {
 std::string number(double value, const char* unit) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.4g %s", value, unit);
-  return buffer;
-}
-
-std::string hex(std::uint64_t value) {
-  char buffer[17];
-  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(value));
   return buffer;
 }
 
@@ -180,8 +159,8 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   const LoopCounters counters = loop.counters();
   result.commands_rejected = counters.commands_rejected;
   result.latency.steps = result.steps;
-  result.latency.compute = summarize_ns(compute_ns);
-  result.latency.lateness = summarize_ns(lateness_ns);
+  result.latency.compute = summarize_times(compute_ns);
+  result.latency.lateness = summarize_times(lateness_ns);
   result.latency.deadline_misses = counters.deadline_misses;
   result.latency.overruns = counters.overruns;
   result.latency.realtime_priority = counters.realtime_priority;
@@ -274,9 +253,9 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       // The first check that differs: the run diverged after the last equal one.
       a.passed = false;
       a.where = h.where;
-      a.measured = "diverged: state hash at step " + std::to_string(h.step) + " is " + hex(it->second) + " (" +
+      a.measured = "diverged: state hash at step " + std::to_string(h.step) + " is " + hash_hex(it->second) + " (" +
                    (last_equal ? "last equal at step " + std::to_string(*last_equal) : "no earlier check") + ")";
-      a.limit = "== " + hex(h.value);
+      a.limit = "== " + hash_hex(h.value);
       break;
     }
     if (a.passed) {
@@ -320,7 +299,7 @@ std::string format_replay_result(const ReplayScript& script, const ReplayResult&
 
 std::string replay_result_json(const ReplayScript& script, const ReplayResult& result) {
   using nlohmann::json;
-  auto dist = [](const TimeDistribution& d) {
+  auto dist = [](const TimeSummary& d) {
     return json{{"p50_us", d.p50_us}, {"p99_us", d.p99_us}, {"p99_9_us", d.p999_us}, {"max_us", d.max_us}};
   };
   json j;
@@ -340,7 +319,7 @@ std::string replay_result_json(const ReplayScript& script, const ReplayResult& r
   j["max_speed_m_s"] = result.max_speed_m_s;
   j["max_penetration_m"] = result.max_penetration_m;
   j["peak_force_n"] = result.peak_force_n;
-  j["final_state_hash"] = hex(result.final_hash);
+  j["final_state_hash"] = hash_hex(result.final_hash);
   json assertions = json::array();
   for (const AssertionResult& a : result.assertions) {
     assertions.push_back({{"name", a.name},

@@ -1,5 +1,6 @@
 #include "ffd/state.h"
 
+#include <cstdio>
 #include <cstring>
 
 namespace ffd {
@@ -21,6 +22,12 @@ void mix(std::uint64_t& hash, const Vec3& v) {
   for (int i = 0; i < 3; ++i) mix(hash, v[i]);
 }
 }  // namespace
+
+std::string hash_hex(std::uint64_t hash) {
+  char digits[17];
+  std::snprintf(digits, sizeof digits, "%016llx", static_cast<unsigned long long>(hash));
+  return digits;
+}
 
 std::uint64_t state_hash(const State& state) {
   std::uint64_t hash = kFnvOffset;

@@ -5,27 +5,23 @@
 
 namespace ffd {
 
-double percentile_us(std::vector<std::int64_t> ns, double pct) {
-  if (ns.empty()) return 0.0;
-  std::sort(ns.begin(), ns.end());
-  const double rank = std::ceil(pct / 100.0 * static_cast<double>(ns.size()));
-  const std::size_t i = static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(ns.size()))) - 1;
-  return static_cast<double>(ns[i]) * 1e-3;
-}
-
-namespace {
-TimeSummary summarise(const std::vector<std::int64_t>& ns) {
+TimeSummary summarize_times(std::vector<std::int64_t> ns) {
   TimeSummary t;
   if (ns.empty()) return t;
+  std::sort(ns.begin(), ns.end());
+  auto at = [&](double pct) {
+    const double rank = std::ceil(pct / 100.0 * static_cast<double>(ns.size()));
+    return static_cast<double>(ns[static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(ns.size()))) - 1]) * 1e-3;
+  };
   double sum = 0.0;
   for (std::int64_t v : ns) sum += static_cast<double>(v);
   t.mean_us = sum / static_cast<double>(ns.size()) * 1e-3;
-  t.p50_us = percentile_us(ns, 50.0);
-  t.p99_us = percentile_us(ns, 99.0);
-  t.max_us = static_cast<double>(*std::max_element(ns.begin(), ns.end())) * 1e-3;
+  t.p50_us = at(50.0);
+  t.p99_us = at(99.0);
+  t.p999_us = at(99.9);
+  t.max_us = static_cast<double>(ns.back()) * 1e-3;
   return t;
 }
-}  // namespace
 
 void StepStatistics::reserve(std::size_t steps) {
   for (auto& v : stage_ns_) v.reserve(steps);
@@ -46,8 +42,8 @@ void StepStatistics::add(const StepReport& report) {
   max_box_penetration_m_ = std::max(max_box_penetration_m_, report.max_box_penetration_m);
 }
 
-TimeSummary StepStatistics::stage_time(Stage stage) const { return summarise(stage_ns_[index(stage)]); }
-TimeSummary StepStatistics::step_time() const { return summarise(total_ns_); }
+TimeSummary StepStatistics::stage_time(Stage stage) const { return summarize_times(stage_ns_[index(stage)]); }
+TimeSummary StepStatistics::step_time() const { return summarize_times(total_ns_); }
 
 std::vector<std::pair<std::string, CounterSummary>> StepStatistics::counters(Stage stage) const {
   struct Field {
@@ -59,6 +55,7 @@ std::vector<std::pair<std::string, CounterSummary>> StepStatistics::counters(Sta
       {"inter_pairs_tested", &StageCounters::inter_pairs_tested}, {"self_pairs_tested", &StageCounters::self_pairs_tested},
       {"node_tests", &StageCounters::node_tests},             {"inter_contacts", &StageCounters::inter_contacts},
       {"self_contacts", &StageCounters::self_contacts},       {"plane_contacts", &StageCounters::plane_contacts},
+      {"probe_contacts", &StageCounters::probe_contacts},
   };
   std::vector<std::pair<std::string, CounterSummary>> out;
   const std::vector<StageCounters>& samples = counters_[index(stage)];

@@ -42,9 +42,7 @@ void run_scene_steps(benchmark::State& bench, const ffd::SceneSpec& spec) {
   for (ffd::Stage s : {ffd::Stage::BoxUpdate, ffd::Stage::BroadPhase, ffd::Stage::NarrowPhase, ffd::Stage::Planes})
     if (stats.ran(s)) collision_p50 += stats.stage_time(s).p50_us;
   bench.counters["collision_p50_us"] = collision_p50;
-  char hash[32];
-  std::snprintf(hash, sizeof hash, "state_hash %016llx", static_cast<unsigned long long>(ffd::state_hash(state)));
-  bench.SetLabel(hash);
+  bench.SetLabel("state_hash " + ffd::hash_hex(ffd::state_hash(state)));
 }
 
 void BM_DefaultSceneStep(benchmark::State& bench) { run_scene_steps(bench, ffd::default_scene()); }

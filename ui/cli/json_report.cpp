@@ -4,10 +4,8 @@
 
 namespace ffdsim {
 
-std::string hex64(std::uint64_t value) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(value));
-  return buf;
+nlohmann::json time_summary_json(const ffd::TimeSummary& t) {
+  return {{"mean_us", t.mean_us}, {"p50_us", t.p50_us}, {"p99_us", t.p99_us}, {"p99_9_us", t.p999_us}, {"max_us", t.max_us}};
 }
 
 nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const ffd::StepStatistics& stats) {
@@ -16,7 +14,7 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   report["scene"] = run.scene;
   report["steps"] = run.steps;
   report["dt_s"] = run.dt;
-  report["state_hash"] = hex64(run.state_hash);
+  report["state_hash"] = ffd::hash_hex(run.state_hash);
   report["finite"] = run.finite;
   report["max_penetration_m"] = run.contacts.max_penetration_m;
   report["max_gap_m"] = run.contacts.max_gap_m;
@@ -43,14 +41,11 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   sizes["regions"] = model.regions.size();
   sizes["hash_table_size"] = model.hash_table_size;
   report["model"] = sizes;
-  auto times = [](const ffd::TimeSummary& t) {
-    return json{{"mean_us", t.mean_us}, {"p50_us", t.p50_us}, {"p99_us", t.p99_us}, {"max_us", t.max_us}};
-  };
   json stages = json::object();
   json pipeline = json::array();
   for (ffd::Stage stage : model.pipeline) {
     pipeline.push_back(ffd::stage_name(stage));
-    json s = times(stats.stage_time(stage));
+    json s = time_summary_json(stats.stage_time(stage));
     json counters = json::object();
     for (const auto& [name, c] : stats.counters(stage))
       if (c.max > 0) counters[name] = {{"mean", c.mean}, {"max", c.max}};
@@ -59,7 +54,7 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   }
   report["pipeline"] = pipeline;
   report["stages"] = stages;
-  report["step"] = times(stats.step_time());
+  report["step"] = time_summary_json(stats.step_time());
   return report;
 }
 

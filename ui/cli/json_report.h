@@ -18,7 +18,8 @@ struct RunSummary {
   ffd::Energy energy;
 };
 
+// {mean_us, p50_us, p99_us, p99_9_us, max_us}
+nlohmann::json time_summary_json(const ffd::TimeSummary& t);
 nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const ffd::StepStatistics& stats);
-std::string hex64(std::uint64_t value);
 
 }  // namespace ffdsim

@@ -14,6 +14,7 @@
 #include "ffd/recording.h"
 #include "ffd/replay_runner.h"
 #include "ffd/scene_loader.h"
+#include "json_report.h"
 
 namespace ffdsim {
 
@@ -23,7 +24,7 @@ std::atomic<bool> g_interrupted{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
 extern "C" void on_interrupt(int) { g_interrupted.store(true); }
 
-void print_distribution(const char* name, const ffd::TimeDistribution& d) {
+void print_distribution(const char* name, const ffd::TimeSummary& d) {
   std::printf("%-9s us: p50 %8.1f  p99 %8.1f  p99.9 %8.1f  max %8.1f\n", name, d.p50_us, d.p99_us, d.p999_us, d.max_us);
 }
 
@@ -114,8 +115,8 @@ int run_run(const RunOptions& o) {
 
   const ffd::LoopCounters counters = loop.counters();
   const std::size_t steps = compute_ns.size();
-  const ffd::TimeDistribution compute = ffd::summarize_ns(compute_ns);
-  const ffd::TimeDistribution lateness = ffd::summarize_ns(lateness_ns);
+  const ffd::TimeSummary compute = ffd::summarize_times(compute_ns);
+  const ffd::TimeSummary lateness = ffd::summarize_times(lateness_ns);
   int status = finite ? kExitOk : kExitNonFinite;
   if (!o.quiet) {
     std::printf("%s: %zu steps in real time at %.0f Hz, budget %.0f us%s\n", scene_path.c_str(), steps,
@@ -129,17 +130,14 @@ int run_run(const RunOptions& o) {
                 counters.memory_locked ? "yes" : "no");
   }
   if (!o.report_path.empty()) {
-    auto dist = [](const ffd::TimeDistribution& d) {
-      return nlohmann::json{{"p50_us", d.p50_us}, {"p99_us", d.p99_us}, {"p99_9_us", d.p999_us}, {"max_us", d.max_us}};
-    };
     const nlohmann::json j = {{"scene", scene_path},
                               {"steps", steps},
                               {"period_us", o.period_us},
                               {"budget_us", o.budget_us},
                               {"interrupted", g_interrupted.load()},
                               {"finite", finite},
-                              {"compute", dist(compute)},
-                              {"lateness", dist(lateness)},
+                              {"compute", time_summary_json(compute)},
+                              {"lateness", time_summary_json(lateness)},
                               {"deadline_misses", counters.deadline_misses},
                               {"overruns", counters.overruns},
                               {"telemetry_dropped", counters.telemetry_dropped},

@@ -35,7 +35,7 @@ void write_surfaces(const std::filesystem::path& dir, const ffd::Model& model, c
 void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::StepStatistics& stats) {
   std::printf("scene %s: %llu steps of %.3g ms\n", run.scene.c_str(), static_cast<unsigned long long>(run.steps),
               run.dt * 1e3);
-  std::printf("state_hash %s  finite %s  energy %.6g J\n", hex64(run.state_hash).c_str(), run.finite ? "true" : "false",
+  std::printf("state_hash %s  finite %s  energy %.6g J\n", ffd::hash_hex(run.state_hash).c_str(), run.finite ? "true" : "false",
               run.energy.total());
   std::printf("surface contacts: max penetration %.3g mm, max gap %.3g mm\n", run.contacts.max_penetration_m * 1e3,
               run.contacts.max_gap_m * 1e3);

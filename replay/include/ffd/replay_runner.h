@@ -8,19 +8,13 @@
 
 #include "ffd/physics_loop.h"
 #include "ffd/replay_script.h"
+#include "ffd/step_statistics.h"
 
 namespace ffd {
 
-// Distribution of one per-step time, microseconds.
-struct TimeDistribution {
-  double p50_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
-};
-// Nearest-rank percentiles of `ns`, which is sorted in place.
-TimeDistribution summarize_ns(std::vector<std::int64_t>& ns);
-
 struct LatencyReport {
   std::uint64_t steps = 0;
-  TimeDistribution compute, lateness;
+  TimeSummary compute, lateness;
   std::uint64_t deadline_misses = 0;
   std::uint64_t overruns = 0;
   bool realtime_priority = false, memory_locked = false;

@@ -2,6 +2,7 @@
 // State: everything that changes while a scene runs. The step index is the only clock.
 // Two States built from the same Model and advanced by the same commands are bit-identical.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "ffd/types.h"
@@ -50,5 +51,8 @@ struct State {
 // FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,
 // then the probe proxy's x and v, in node order. ~20 us for 3,000 nodes.
 std::uint64_t state_hash(const State& state);
+
+// A state hash as printed and as replay scripts hold it: 16 lower-case hex digits.
+std::string hash_hex(std::uint64_t hash);
 
 }  // namespace ffd

@@ -8,9 +8,11 @@
 
 namespace ffd {
 
+// A distribution of per-step times: nearest-rank percentiles.
 struct TimeSummary {
-  double mean_us = 0.0, p50_us = 0.0, p99_us = 0.0, max_us = 0.0;
+  double mean_us = 0.0, p50_us = 0.0, p99_us = 0.0, p999_us = 0.0, max_us = 0.0;
 };
+TimeSummary summarize_times(std::vector<std::int64_t> ns);
 
 struct CounterSummary {
   double mean = 0.0;
@@ -43,7 +45,5 @@ class StepStatistics {
   double max_box_penetration_m_ = 0.0;
 };
 
-// Percentile (0..100) of a sample by nearest rank on a sorted copy; 0 for no samples.
-double percentile_us(std::vector<std::int64_t> ns, double pct);
 
 }  // namespace ffd
