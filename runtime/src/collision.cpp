@@ -46,9 +46,6 @@ Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes) {
 
 namespace {
 
-// How far back (in steps) a node's way into a box is trusted to pick the contact face.
-constexpr double kRecentEntrySteps = 2.0;
-
 // Section 7 for a node of cell B found inside the box of cell A: n is A's outward normal of
 // least penetration, r the depth (eq. 7).
 template <bool kFriction>

@@ -9,6 +9,10 @@ namespace ffd {
 // Eq. 2 for the 9 nodes of box b from its cell's 8 lattice nodes; marks it valid.
 void update_box(const Model& model, const State& state, Scratch& scratch, Index b);
 
+// How far back (in steps) a node's way into a box is trusted to pick the contact face
+// (box_test.h, the velocity-aware node_in_box); shared by box pairs and the probe.
+inline constexpr double kRecentEntrySteps = 2.0;
+
 // Box b recomputed if a response made it stale (counted in `counters`).
 void ensure_box(const Model& model, const State& state, Scratch& scratch, Index b, StageCounters& counters);
 

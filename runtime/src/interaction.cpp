@@ -10,18 +10,24 @@
 
 namespace ffd {
 
-Vec3 probe_node_offset(int k) {
-  if (k == 0) return Vec3::Zero();
-  // k - 1 walks the 26 neighbours of a 3x3x3 grid, skipping its centre.
-  const int cell = k - 1 < 13 ? k - 1 : k;
-  const Vec3 direction(cell % 3 - 1, (cell / 3) % 3 - 1, cell / 9 - 1);
-  return direction / direction.norm();
+namespace {
+std::array<Vec3, kProbeNodeCount> make_probe_node_offsets() {
+  std::array<Vec3, kProbeNodeCount> offsets;
+  offsets[0] = Vec3::Zero();
+  // The 26 neighbours of a 3x3x3 grid (its centre skipped), normalised.
+  for (int k = 1; k < kProbeNodeCount; ++k) {
+    const int cell = k - 1 < 13 ? k - 1 : k;
+    const Vec3 direction(cell % 3 - 1, (cell / 3) % 3 - 1, cell / 9 - 1);
+    offsets[k] = direction / direction.norm();
+  }
+  return offsets;
 }
+}  // namespace
+
+// Computed once at start-up, not in the step.
+const std::array<Vec3, kProbeNodeCount> kProbeNodeOffsets = make_probe_node_offsets();
 
 namespace {
-
-// How far back (in steps) a node's way into a box picks the contact face (as for box pairs).
-constexpr double kRecentEntrySteps = 2.0;
 
 // Section 7 between one lattice cell and the probe proxy. `n` is the direction that
 // separates them for the probe: the probe moves along +n, the cell along -n, the pair's
@@ -53,7 +59,7 @@ void probe_against_box(const Model& model, State& state, Scratch& scratch, Index
   BoxPlanes planes = box_planes(scratch.box_nodes[b]);
   for (int k = 0; k < kProbeNodeCount && !planes.degenerate; ++k) {
     ++counters.node_tests;
-    const Vec3 node = probe.x + radius * probe_node_offset(k);
+    const Vec3 node = probe.x + radius * kProbeNodeOffsets[k];
     const Vec3 relative_velocity = probe.v - mean_velocity(state, model.cell_nodes[cell]);
     const NodeInBox hit = node_in_box(planes, node, relative_velocity, kRecentEntrySteps * model.settings.dt);
     if (!hit.inside) continue;

@@ -12,6 +12,6 @@ void interact(const Model& model, State& state, Scratch& scratch, StageCounters&
 // The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
 // directions, 12 edge and 8 corner directions of a cube (27 in all).
 inline constexpr int kProbeNodeCount = 27;
-Vec3 probe_node_offset(int k);
+extern const std::array<Vec3, kProbeNodeCount> kProbeNodeOffsets;
 
 }  // namespace ffd

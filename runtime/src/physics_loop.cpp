@@ -360,6 +360,7 @@ LoopCounters PhysicsLoop::counters() const {
   c.snapshots_dropped = i.snapshots_dropped.load();
   c.commands_rejected = i.rejected.load();
   c.commands_late = i.late.load();
+  c.commands_unrecorded = i.applied_dropped.load();
   c.frames_published = i.frames_published.load();
   c.realtime_priority = i.fifo.load();
   c.memory_locked = i.locked.load();

@@ -13,7 +13,9 @@ inline constexpr int kExitBadInput = 2;         // a scene, script, mesh or outp
 inline constexpr int kExitNonFinite = 3;        // the simulation produced NaN or infinity
 inline constexpr int kExitAssertionFailed = 4;  // a replay assertion failed
 
-// Creates the folder a file will be written into; throws naming it on failure.
+// Create a folder, or the folder a file will be written into; throw naming it on failure.
+// Called before a run, so that a bad output path fails before the run rather than after it.
+void ensure_folder(const std::string& dir);
 void ensure_parent_folder(const std::string& file_path);
 
 struct SimulateOptions {

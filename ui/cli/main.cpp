@@ -6,12 +6,15 @@
 #include "commands.h"
 
 namespace ffdsim {
-void ensure_parent_folder(const std::string& file_path) {
-  const std::filesystem::path dir = std::filesystem::path(file_path).parent_path();
+void ensure_folder(const std::string& dir) {
   if (dir.empty()) return;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(dir.string() + ": cannot create folder: " + ec.message());
+  if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
+}
+
+void ensure_parent_folder(const std::string& file_path) {
+  ensure_folder(std::filesystem::path(file_path).parent_path().string());
 }
 }  // namespace ffdsim
 

@@ -160,6 +160,12 @@ int run_run(const RunOptions& o) {
       std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
       status = kExitBadInput;
     }
+    if (counters.commands_unrecorded > 0) {
+      // Written anyway (it holds all that arrived), but it will not replay this session.
+      std::fprintf(stderr, "ffdsim: error: %s: %llu applied commands were lost before the recorder read them\n",
+                   o.record_path.c_str(), static_cast<unsigned long long>(counters.commands_unrecorded));
+      status = kExitBadInput;
+    }
   }
   return status;
 }

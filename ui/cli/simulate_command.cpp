@@ -75,15 +75,8 @@ int run_simulate(const SimulateOptions& o) {
     const ffd::Model model = ffd::compile(spec, log);
     if (!o.quiet)
       for (const std::string& line : log) std::fprintf(stderr, "ffdsim: %s\n", line.c_str());
-    // Folders first, so a bad output path fails before the run rather than after it.
-    auto make_folder = [](const std::filesystem::path& dir) {
-      if (dir.empty()) return;
-      std::error_code ec;
-      std::filesystem::create_directories(dir, ec);
-      if (ec) throw std::runtime_error(dir.string() + ": cannot create folder: " + ec.message());
-    };
-    make_folder(o.out_dir);
-    if (!o.report_path.empty()) make_folder(std::filesystem::path(o.report_path).parent_path());
+    ensure_folder(o.out_dir);
+    if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     ffd::State state = ffd::initial_state(model);
     ffd::Scratch scratch = ffd::make_scratch(model);
     ffd::StepStatistics stats;

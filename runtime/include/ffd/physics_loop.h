@@ -104,6 +104,7 @@ struct LoopCounters {
   std::uint64_t snapshots_dropped = 0;    // real time only
   std::uint64_t commands_rejected = 0;    // malformed for this model (command_is_valid)
   std::uint64_t commands_late = 0;        // arrived after their step had run: applied at once
+  std::uint64_t commands_unrecorded = 0;  // real time only: applied, but the recorder fell behind
   std::uint64_t frames_published = 0;
   bool realtime_priority = false;         // SCHED_FIFO was granted
   bool memory_locked = false;             // mlockall succeeded
