@@ -469,3 +469,26 @@ TEST_CASE("scene value errors", "[scene_loader]") {
                   "inline.toml:5:9: plane[0].point: give either 'offset' or 'point', not both");
   }
 }
+
+TEST_CASE("probe and grab tables are read, and only with their effects", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(
+      "[simulation]\neffects = [\"probe\", \"grab\"]\n"
+      "[probe]\nradius = 0.02\nmass = 0.1\ncoupling_stiffness = 500.0\ncoupling_damping = 3.0\nstart = [0.1, 0.2, 0.3]\n"
+      "[grab]\nstiffness = 50.0\ndamping = 1.5\n"
+      "[[object]]\n" + kBoxLines);
+  const ffd::ProbeSettings& p = scene.settings.probe;
+  CHECK(p.radius == 0.02);
+  CHECK(p.mass == 0.1);
+  CHECK(p.coupling_stiffness == 500.0);
+  CHECK(p.coupling_damping == 3.0);
+  CHECK(p.start == ffd::Vec3(0.1, 0.2, 0.3));
+  CHECK(scene.settings.grab.stiffness == 50.0);
+  CHECK(scene.settings.grab.damping == 1.5);
+  require_error("[simulation]\neffects = [\"gravity\"]\n[probe]\nradius = 0.02\n[[object]]\n" + kBoxLines,
+                "inline.toml:3:1: probe: [probe] is given but the \"probe\" effect is off; add \"probe\" to "
+                "simulation.effects");
+  require_error("[simulation]\neffects = [\"probe\"]\n[probe]\nradius = -1.0\n[[object]]\n" + kBoxLines,
+                "inline.toml:4:10: probe.radius: must be > 0 (got -1)");
+  require_error("[simulation]\neffects = [\"grab\"]\n[grab]\nstifness = 1.0\n[[object]]\n" + kBoxLines,
+                "inline.toml:4:1: grab.stifness: unknown key 'stifness'; did you mean 'stiffness'?");
+}

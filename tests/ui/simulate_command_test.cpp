@@ -111,3 +111,37 @@ TEST_CASE("--help works for the program and the command", "[cli]") {
   CHECK(sub.exit_code == 0);
   CHECK_THAT(sub.output, Catch::Contains("--obj-every"));
 }
+
+TEST_CASE("replay exits 0 when every assertion holds, 4 when one fails, 2 on a bad script", "[cli]") {
+  const std::filesystem::path dir = temp_dir("replay");
+  std::filesystem::create_directories(dir);
+  const std::string scene = std::string(FFDSIM_TEST_DATA_DIR) + "/scenes/probe_and_grab.toml";
+  auto write = [&](const std::string& name, const std::string& body) {
+    const std::string path = (dir / name).string();
+    std::ofstream(path) << "version = 1\nscene = \"" << scene << "\"\nsteps = 100\n" << body;
+    return path;
+  };
+  const std::string report = (dir / "out" / "replay.json").string();
+  Result r = run_ffdsim("replay --fast " + write("ok.toml", "[assert.stability]\nfinite = true\nspeed_max_m_s = 100.0\n") +
+                        " --report " + report);
+  INFO(r.output);
+  CHECK(r.exit_code == 0);
+  CHECK(r.output.find("PASS stability.finite") != std::string::npos);
+  std::ifstream in(report);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  CHECK(j.at("passed") == true);
+  CHECK(j.at("steps") == 100);
+
+  r = run_ffdsim("replay --fast " + write("fail.toml", "[assert.stability]\nspeed_max_m_s = 0.000001\n"));
+  CHECK(r.exit_code == 4);
+  CHECK(r.output.find("FAIL stability.speed_max_m_s") != std::string::npos);
+
+  const std::string bad = write("bad.toml", "[[event]]\nat_ms = 5\nalpha = 2.0\n");
+  r = run_ffdsim("replay --fast " + bad);
+  CHECK(r.exit_code == 2);
+  CHECK(r.output.find(bad + ":6:9: event[0].alpha: must be in [0, 1] (got 2)") != std::string::npos);
+
+  r = run_ffdsim("run " + scene);
+  CHECK(r.exit_code == 1);
+  CHECK(r.output.find("pass --headless") != std::string::npos);
+}
