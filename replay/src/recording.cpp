@@ -27,8 +27,6 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-Index object_of_cell(const Model& model, Index cell) { return model.cell_object[cell]; }
-
 }  // namespace
 
 std::string recording_text(const Model& model, const Recording& r) {
@@ -46,7 +44,7 @@ std::string recording_text(const Model& model, const Recording& r) {
     switch (c.kind) {
       case CommandKind::ProbePose: s << "probe = " << vec(c.vector) << "\n"; break;
       case CommandKind::Grab: {
-        const Index object = object_of_cell(model, c.cell);
+        const Index object = model.cell_object[c.cell];
         s << "grab = { object = " << quoted(model.objects[object].name)
           << ", cell = " << (c.cell - model.objects[object].cell_begin) << ", local = " << vec(c.local) << " }\n";
         break;

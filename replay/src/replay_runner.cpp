@@ -92,7 +92,6 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   double largest_cell = 0.0;
   for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
   State surface_state = initial_state(model);  // holds a snapshot's lattice for deformed_surface()
-  std::size_t next_hash = 0;
 
   auto drain = [&] {
     Telemetry t;
@@ -116,10 +115,6 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       track(t.probe_force_n.norm(), result.peak_force_n, result.peak_force_step);
       if (t.has_hash) {
         result.hashes.emplace_back(t.step, t.state_hash);
-        while (next_hash < script.hashes.size() && script.hashes[next_hash].step < t.step) ++next_hash;
-        if (next_hash < script.hashes.size() && script.hashes[next_hash].step == t.step &&
-            script.hashes[next_hash].value != t.state_hash && !result.first_divergence)
-          result.first_divergence = t.step;
       }
     }
     while (Snapshot* s = loop.pop_snapshot()) {
@@ -251,6 +246,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
         continue;
       }
       // The first check that differs: the run diverged after the last equal one.
+      result.first_divergence = h.step;
       a.passed = false;
       a.where = h.where;
       a.measured = "diverged: state hash at step " + std::to_string(h.step) + " is " + hash_hex(it->second) + " (" +
