@@ -16,7 +16,7 @@ const std::vector<std::string_view> kRootKeys = {"format", "version", "descripti
                                                  "duration_ms", "event", "probe_path", "drag_path",
                                                  "assert", "record"};
 const std::vector<std::string_view> kEventKeys = {"at_step", "at_ms", "probe", "grab", "drag", "release",
-                                                  "alpha", "beta", "gravity", "stiffness", "budget_us",
+                                                  "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "budget_us",
                                                   "pause_ms", "resume", "single_step", "reset"};
 const std::vector<std::string_view> kGrabKeys = {"object", "point", "cell", "local", "target"};
 const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
@@ -189,6 +189,10 @@ class ScriptReader {
         c.vector = e.vec3(key, Vec3::Zero());
       } else if (key == "stiffness") {
         c = read_stiffness(e, step);
+      } else if (key == "probe_stiffness") {
+        require_effect(e, key, Effect::Probe);
+        c.kind = CommandKind::SetProbeStiffness;
+        c.value = e.number(key, 0.0, kNonNegative);
       } else if (key == "budget_us") {
         c.kind = CommandKind::SetBudget;
         c.value = e.number(key, 0.0, kPositive);

@@ -16,6 +16,7 @@ const char* command_name(CommandKind kind) {
     case CommandKind::SetBeta: return "beta";
     case CommandKind::SetGravity: return "gravity";
     case CommandKind::SetStiffness: return "stiffness";
+    case CommandKind::SetProbeStiffness: return "probe_stiffness";
     case CommandKind::Reset: return "reset";
     case CommandKind::SetBudget: return "budget";
     case CommandKind::Pause: return "pause";
@@ -45,6 +46,8 @@ bool command_is_valid(const Model& model, const Command& c) {
       if (c.object >= model.objects.size() || !std::isfinite(c.value) || !(c.value > 0.0)) return false;
       return model.objects[c.object].dynamics == DynamicsKind::MassSpring || c.value <= 1.0;
     }
+    case CommandKind::SetProbeStiffness:
+      return has(model.settings.effects, Effect::Probe) && std::isfinite(c.value) && c.value >= 0.0;
     case CommandKind::SetBudget: return std::isfinite(c.value) && c.value > 0.0;
     case CommandKind::Pause: return std::isfinite(c.value) && c.value >= 0.0;
     case CommandKind::Reset:
@@ -75,12 +78,14 @@ void apply_command(const Model& model, const State& initial, State& state, const
     case CommandKind::SetBeta: state.params.beta = c.value; break;
     case CommandKind::SetGravity: state.params.gravity = c.vector; break;
     case CommandKind::SetStiffness: state.params.stiffness[c.object] = c.value; break;
+    case CommandKind::SetProbeStiffness: state.params.probe_stiffness = c.value; break;
     case CommandKind::Reset: {
       // Element-wise copies into vectors of the same size: no allocation.
       const std::uint64_t step = state.step;
       state.params.gravity = initial.params.gravity;
       state.params.alpha = initial.params.alpha;
       state.params.beta = initial.params.beta;
+      state.params.probe_stiffness = initial.params.probe_stiffness;
       std::copy(initial.params.stiffness.begin(), initial.params.stiffness.end(), state.params.stiffness.begin());
       std::copy(initial.x.begin(), initial.x.end(), state.x.begin());
       std::copy(initial.v.begin(), initial.v.end(), state.v.begin());

@@ -320,6 +320,7 @@ State initial_state(const Model& model) {
   state.params.gravity = model.settings.gravity;
   state.params.alpha = model.settings.alpha;
   state.params.beta = model.settings.beta;
+  state.params.probe_stiffness = model.settings.probe.coupling_stiffness;
   state.params.stiffness.resize(model.objects.size());
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
     const ObjectModel& o = model.objects[i];

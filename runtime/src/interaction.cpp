@@ -93,7 +93,7 @@ void step_probe(const Model& model, State& state, Scratch& scratch, StageCounter
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
   const double dt = model.settings.dt, m = settings.mass;
-  const double k = settings.coupling_stiffness, c = settings.coupling_damping;
+  const double k = state.params.probe_stiffness, c = settings.coupling_damping;
   const Vec3 device_velocity = (probe.device - probe.device_previous) / dt;
   probe.device_previous = probe.device;
   // m (v' - v) = dt (k (device - x - dt v') + c (device_velocity - v'))

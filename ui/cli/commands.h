@@ -43,7 +43,12 @@ int run_replay_command(const ReplayOptions& options);
 struct RunOptions {
   std::string scene;  // empty = the default scene
   bool headless = false;
-  double seconds = 10.0;
+  bool window = false;       // insist on a window (error without a display)
+  std::string frames_dir;    // headless viewer: write PNG frames here
+  double fps = 10.0;
+  std::string input_script;  // UI input script (mouse and keys)
+  int width = 1280, height = 720;
+  double seconds = 0.0;  // 0: 10 s headless; the window runs until closed
   std::string record_path;
   long long hash_every = 100;
   std::string report_path;

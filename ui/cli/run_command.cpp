@@ -1,14 +1,20 @@
-// `ffdsim run`: the physics loop in real time. Headless, it runs for --seconds (or until
-// Ctrl-C), reads frames as a 60 Hz display would, and prints the loop's latency figures.
+// `ffdsim run`: a scene on the real-time physics loop.
+//   - with a display: the interactive window (GLFW);
+//   - without one: the headless demo, which drives the same viewer from a UI input script on
+//     EGL and writes PNG frames and the latency report;
+//   - `--headless` alone: the physics loop only, read at a display's pace (no rendering);
+//   - `--headless --frames DIR` / `--input FILE`: the headless viewer.
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 
+#include "app/ui_run.h"
 #include "commands.h"
 #include "ffd/physics_loop.h"
 #include "ffd/recording.h"
@@ -20,22 +26,166 @@ namespace ffdsim {
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+volatile std::sig_atomic_t g_interrupted_signal = 0;
+volatile bool g_interrupted = false;
+extern "C" void on_interrupt(int) {
+  g_interrupted_signal = 1;
+  g_interrupted = true;
+}
 
 void print_distribution(const char* name, const ffd::TimeSummary& d) {
   std::printf("%-9s us: p50 %8.1f  p99 %8.1f  p99.9 %8.1f  max %8.1f\n", name, d.p50_us, d.p99_us, d.p999_us, d.max_us);
 }
 
+std::string demo_script_path() { return FFDSIM_SCENARIO_DIR "/replays/ui_demo.toml"; }
+
+bool display_present() {
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  return (x11 && *x11) || (wayland && *wayland);
+}
+
+// What every run reports, whichever way it ran.
+struct RunFigures {
+  std::string scene_path;
+  std::string mode;  // "window", "headless viewer", "headless loop"
+  std::vector<std::int64_t> compute_ns, lateness_ns;
+  ffd::LoopCounters counters;
+  bool finite = true;
+  ffd::Recording log;
+  nlohmann::json ui;  // UI figures, when a viewer ran
+};
+
+int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
+  const std::size_t steps = f.compute_ns.size();
+  const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
+  const ffd::TimeSummary lateness = ffd::summarize_times(f.lateness_ns);
+  int status = f.finite ? kExitOk : kExitNonFinite;
+  const bool interrupted = g_interrupted_signal != 0;
+  if (!o.quiet) {
+    std::printf("%s (%s): %zu steps in real time at %.0f Hz, budget %.0f us%s\n", f.scene_path.c_str(), f.mode.c_str(),
+                steps, 1e6 / o.period_us, o.budget_us, interrupted ? " (interrupted)" : "");
+    print_distribution("compute", compute);
+    print_distribution("lateness", lateness);
+    std::printf("deadline misses %llu (%.2f%%), overruns re-phased %llu, late commands %llu; SCHED_FIFO %s, mlockall %s\n",
+                static_cast<unsigned long long>(f.counters.deadline_misses),
+                steps ? 100.0 * static_cast<double>(f.counters.deadline_misses) / static_cast<double>(steps) : 0.0,
+                static_cast<unsigned long long>(f.counters.overruns), static_cast<unsigned long long>(f.counters.commands_late),
+                f.counters.realtime_priority ? "yes" : "no", f.counters.memory_locked ? "yes" : "no");
+    if (!f.ui.is_null())
+      std::printf("ui: %s, %zu frames, %.1f ms per frame (max %.1f), %zu commands applied\n",
+                  f.ui.value("renderer", "").c_str(), f.ui.value("frames", std::size_t{0}), f.ui.value("frame_mean_ms", 0.0),
+                  f.ui.value("frame_max_ms", 0.0), f.log.commands.size());
+  }
+  if (!o.report_path.empty()) {
+    nlohmann::json j = {{"scene", f.scene_path},
+                        {"mode", f.mode},
+                        {"steps", steps},
+                        {"period_us", o.period_us},
+                        {"budget_us", o.budget_us},
+                        {"interrupted", interrupted},
+                        {"finite", f.finite},
+                        {"compute", time_summary_json(compute)},
+                        {"lateness", time_summary_json(lateness)},
+                        {"deadline_misses", f.counters.deadline_misses},
+                        {"overruns", f.counters.overruns},
+                        {"commands_applied", f.log.commands.size()},
+                        {"commands_late", f.counters.commands_late},
+                        {"telemetry_dropped", f.counters.telemetry_dropped},
+                        {"sched_fifo", f.counters.realtime_priority},
+                        {"memory_locked", f.counters.memory_locked}};
+    if (!f.ui.is_null()) j["ui"] = f.ui;
+    std::ofstream out(o.report_path);
+    out << j.dump(2) << '\n';
+    if (!out) {
+      std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
+      status = kExitBadInput;
+    }
+  }
+  if (!o.record_path.empty()) {
+    try {
+      ffd::write_recording(o.record_path, model, f.log);
+      if (!o.quiet)
+        std::printf("recorded %zu commands and %zu state hashes to %s\n", f.log.commands.size(), f.log.hashes.size(),
+                    o.record_path.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+      status = kExitBadInput;
+    }
+    if (f.counters.commands_unrecorded > 0) {
+      // Written anyway (it holds all that arrived), but it will not replay this session.
+      std::fprintf(stderr, "ffdsim: error: %s: %llu applied commands were lost before the recorder read them\n",
+                   o.record_path.c_str(), static_cast<unsigned long long>(f.counters.commands_unrecorded));
+      status = kExitBadInput;
+    }
+  }
+  return status;
+}
+
+ffd::LoopOptions loop_options(const RunOptions& o) {
+  ffd::LoopOptions options;
+  options.pacing = ffd::Pacing::RealTime;
+  options.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);
+  options.budget_ns = static_cast<std::int64_t>(o.budget_us * 1000.0);
+  options.spin_ns = static_cast<std::int64_t>(o.spin_us * 1000.0);
+  options.hash_every = static_cast<std::uint32_t>(o.hash_every);
+  return options;
+}
+
+// The physics loop alone, its queues read at a 60 Hz display's pace.
+RunFigures run_loop_only(const RunOptions& o, const ffd::Model& model, const std::string& scene_path) {
+  const ffd::LoopOptions options = loop_options(o);
+  ffd::PhysicsLoop loop(model, ffd::initial_state(model), options);
+  const double seconds = o.seconds > 0.0 ? o.seconds : 10.0;
+  RunFigures f;
+  f.scene_path = scene_path;
+  f.mode = "headless loop";
+  const std::size_t expected_steps = static_cast<std::size_t>(seconds * 1e9 / static_cast<double>(options.period_ns)) + 16;
+  f.compute_ns.reserve(expected_steps);
+  f.lateness_ns.reserve(expected_steps);
+  f.log.scene_path = scene_path;
+  f.log.hash_every = static_cast<std::uint32_t>(o.hash_every);
+  auto drain = [&] {
+    ffd::Telemetry t;
+    while (loop.pop_telemetry(t)) {
+      f.compute_ns.push_back(t.compute_ns);
+      f.lateness_ns.push_back(t.lateness_ns);
+      f.finite = f.finite && t.finite;
+      f.log.steps = t.step;
+      if (t.has_hash) f.log.hashes.emplace_back(t.step, t.state_hash);
+    }
+    ffd::Command c;
+    while (loop.pop_applied_command(c)) f.log.commands.push_back(c);
+  };
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  loop.start();
+  while (std::chrono::steady_clock::now() < end && !g_interrupted && !loop.finished()) {
+    loop.latest_frame();
+    drain();
+    std::this_thread::sleep_for(std::chrono::milliseconds(16));
+  }
+  loop.request_stop();
+  loop.join();
+  drain();
+  f.counters = loop.counters();
+  return f;
+}
+
 }  // namespace
 
 void register_run(CLI::App& app, RunOptions& o) {
-  CLI::App* cmd = app.add_subcommand("run", "Run a scene on the real-time physics loop");
+  CLI::App* cmd = app.add_subcommand(
+      "run", "Run a scene on the real-time physics loop: a window where there is a display, else the headless demo");
   cmd->add_option("scene", o.scene, "Scene file (TOML); default: two teapots dropped on a floor");
-  cmd->add_flag("--headless", o.headless, "No window: run, then print the latency figures");
-  cmd->add_option("--seconds", o.seconds, "Wall-clock seconds to run (Ctrl-C ends it earlier)")
+  cmd->add_flag("--headless", o.headless, "No window. Alone: the physics loop only; with --frames or --input: the viewer on EGL");
+  cmd->add_flag("--window", o.window, "Insist on a window (fail without a display)")->excludes("--headless");
+  cmd->add_option("--seconds", o.seconds, "Wall-clock seconds to run (default: 10 headless, until closed in a window)")
       ->check(CLI::Range(0.001, 1e6));
+  cmd->add_option("--frames", o.frames_dir, "Headless: write what the window would show as PNGs (and frames.json) here");
+  cmd->add_option("--fps", o.fps, "PNG frames per simulated second")->check(CLI::Range(0.1, 1000.0));
+  cmd->add_option("--input", o.input_script, "UI input script: mouse and keys drive the viewer (README, \"UI input scripts\")");
+  cmd->add_option("--width", o.width, "Framebuffer width, px")->check(CLI::Range(64, 8192));
+  cmd->add_option("--height", o.height, "Framebuffer height, px")->check(CLI::Range(64, 8192));
   cmd->add_option("--record", o.record_path, "Record the command stream and state hashes to this replay file");
   cmd->add_option("--hash-every", o.hash_every, "State hash every N steps (recording, report)")
       ->check(CLI::Range(1LL, 1000000LL));
@@ -46,128 +196,114 @@ void register_run(CLI::App& app, RunOptions& o) {
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
 
-int run_run(const RunOptions& o) {
-  if (!o.headless) {
-    std::fprintf(stderr, "ffdsim: error: run: the interactive window is not part of this build; pass --headless\n");
-    return kExitUsage;
+int run_run(const RunOptions& given) {
+  RunOptions o = given;
+  // No display and no --headless: the headless demo, with its outputs where the README says.
+  const bool demo = !o.headless && !o.window && !display_present();
+  if (demo) {
+    if (o.frames_dir.empty()) o.frames_dir = "out/frames";
+    if (o.report_path.empty()) o.report_path = "out/report.json";
+    if (o.input_script.empty() && o.seconds == 0.0) o.input_script = demo_script_path();
+    if (!o.quiet) std::printf("no display (DISPLAY is not set): running the headless demo\n");
   }
+  const bool viewer = !o.headless || !o.frames_dir.empty() || !o.input_script.empty();
   ffd::Model model;
   std::string scene_path;
+  std::optional<ffd::UiScript> script;
   try {
-    scene_path = std::filesystem::absolute(o.scene.empty() ? ffd::default_scene_path() : o.scene).lexically_normal();
-    const ffd::SceneSpec spec = ffd::load_scene_file(scene_path);
+    if (!o.input_script.empty()) {
+      script = ffd::load_ui_script_file(o.input_script);
+      if (!script->scene_path.empty() && !o.scene.empty() && !demo)
+        throw ffd::InputError(o.input_script + ": names a scene and the command line names another; give one");
+    }
+    const std::string scene = !o.scene.empty() ? o.scene : script && !script->scene_path.empty() ? script->scene_path : ffd::default_scene_path();
+    scene_path = std::filesystem::absolute(scene).lexically_normal().string();
     std::vector<std::string> log;
-    model = ffd::compile(spec, log);
+    model = ffd::compile(ffd::load_scene_file(scene_path), log);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (!o.record_path.empty()) ensure_parent_folder(o.record_path);
+    if (!o.frames_dir.empty()) ensure_folder(o.frames_dir);
+    if (!o.frames_dir.empty() && !o.headless && !demo && !o.window && display_present())
+      throw ffd::InputError("--frames writes the headless viewer's frames: add --headless");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
   }
 
-  ffd::LoopOptions options;
-  options.pacing = ffd::Pacing::RealTime;
-  options.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);
-  options.budget_ns = static_cast<std::int64_t>(o.budget_us * 1000.0);
-  options.spin_ns = static_cast<std::int64_t>(o.spin_us * 1000.0);
-  options.hash_every = static_cast<std::uint32_t>(o.hash_every);
-  ffd::PhysicsLoop loop(model, ffd::initial_state(model), options);
-
-  const std::size_t expected_steps = static_cast<std::size_t>(o.seconds * 1e9 / static_cast<double>(options.period_ns)) + 16;
-  std::vector<std::int64_t> compute_ns, lateness_ns;
-  compute_ns.reserve(expected_steps);
-  lateness_ns.reserve(expected_steps);
-  ffd::Recording recording;
-  recording.scene_path = scene_path;
-  recording.hash_every = static_cast<std::uint32_t>(o.hash_every);
-  bool finite = true;
-
-  auto drain = [&] {
-    ffd::Telemetry t;
-    while (loop.pop_telemetry(t)) {
-      compute_ns.push_back(t.compute_ns);
-      lateness_ns.push_back(t.lateness_ns);
-      finite = finite && t.finite;
-      recording.steps = t.step;
-      if (t.has_hash) recording.hashes.emplace_back(t.step, t.state_hash);
-    }
-    ffd::Command c;
-    while (loop.pop_applied_command(c)) recording.commands.push_back(c);
-  };
-
-  g_interrupted.store(false);
+  g_interrupted_signal = 0;
+  g_interrupted = false;
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
-  const auto start = std::chrono::steady_clock::now();
-  const auto end = start + std::chrono::duration<double>(o.seconds);
-  loop.start();
-  // A display's pace: take the newest frame, drain the lossless queues.
-  while (std::chrono::steady_clock::now() < end && !g_interrupted.load() && !loop.finished()) {
-    loop.latest_frame();
-    drain();
-    std::this_thread::sleep_for(std::chrono::milliseconds(16));
-  }
-  loop.request_stop();
-  loop.join();
-  drain();
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
-
-  const ffd::LoopCounters counters = loop.counters();
-  const std::size_t steps = compute_ns.size();
-  const ffd::TimeSummary compute = ffd::summarize_times(compute_ns);
-  const ffd::TimeSummary lateness = ffd::summarize_times(lateness_ns);
-  int status = finite ? kExitOk : kExitNonFinite;
-  if (!o.quiet) {
-    std::printf("%s: %zu steps in real time at %.0f Hz, budget %.0f us%s\n", scene_path.c_str(), steps,
-                1e6 / o.period_us, o.budget_us, g_interrupted.load() ? " (interrupted)" : "");
-    print_distribution("compute", compute);
-    print_distribution("lateness", lateness);
-    std::printf("deadline misses %llu (%.2f%%), overruns re-phased %llu; SCHED_FIFO %s, mlockall %s\n",
-                static_cast<unsigned long long>(counters.deadline_misses),
-                steps ? 100.0 * static_cast<double>(counters.deadline_misses) / static_cast<double>(steps) : 0.0,
-                static_cast<unsigned long long>(counters.overruns), counters.realtime_priority ? "yes" : "no",
-                counters.memory_locked ? "yes" : "no");
-  }
-  if (!o.report_path.empty()) {
-    const nlohmann::json j = {{"scene", scene_path},
-                              {"steps", steps},
-                              {"period_us", o.period_us},
-                              {"budget_us", o.budget_us},
-                              {"interrupted", g_interrupted.load()},
-                              {"finite", finite},
-                              {"compute", time_summary_json(compute)},
-                              {"lateness", time_summary_json(lateness)},
-                              {"deadline_misses", counters.deadline_misses},
-                              {"overruns", counters.overruns},
-                              {"telemetry_dropped", counters.telemetry_dropped},
-                              {"sched_fifo", counters.realtime_priority},
-                              {"memory_locked", counters.memory_locked}};
-    std::ofstream out(o.report_path);
-    out << j.dump(2) << '\n';
-    if (!out) {
-      std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
-      status = kExitBadInput;
-    }
-  }
-  if (!o.record_path.empty()) {
+  RunFigures figures;
+  int status = kExitOk;
+  if (!viewer) {
+    figures = run_loop_only(o, model, scene_path);
+  } else {
+    ffd::ui::UiRunOptions u;
+    u.viewer.scene_path = scene_path;
+    u.viewer.session.loop = loop_options(o);
+    u.script = script;
+    u.seconds = o.seconds > 0.0 ? o.seconds : (o.headless || demo) && !script ? 10.0 : 0.0;
+    if (script && o.seconds == 0.0) u.seconds = script->duration_ms * 1e-3 * 20.0 + 30.0;  // a guard, far beyond
+    u.frames_dir = o.frames_dir;
+    u.fps = o.fps;
+    u.width = o.width;
+    u.height = o.height;
+    u.interrupted = &g_interrupted;
+    ffd::ui::UiRunResult r;
     try {
-      ffd::write_recording(o.record_path, model, recording);
-      if (!o.quiet)
-        std::printf("recorded %zu commands and %zu state hashes to %s\n", recording.commands.size(),
-                    recording.hashes.size(), o.record_path.c_str());
+      const bool window = !o.headless && !demo;
+      try {
+        r = window ? ffd::ui::run_window(u) : ffd::ui::run_headless(u);
+        figures.mode = window ? "window" : "headless viewer";
+      } catch (const ffd::InputError&) {
+        throw;
+      } catch (const std::exception& e) {
+        if (!window || o.window) throw;
+        // A display that cannot give a window: fall back to the headless demo.
+        std::fprintf(stderr, "ffdsim: %s; running the headless demo instead\n", e.what());
+        if (u.frames_dir.empty()) u.frames_dir = o.frames_dir = "out/frames";
+        if (o.report_path.empty()) o.report_path = "out/report.json";
+        ensure_folder(u.frames_dir);
+        ensure_parent_folder(o.report_path);
+        if (!u.script) {
+          u.script = ffd::load_ui_script_file(demo_script_path());
+          u.seconds = u.script->duration_ms * 1e-3 * 20.0 + 30.0;
+        }
+        r = ffd::ui::run_headless(u);
+        figures.mode = "headless viewer";
+      }
+    } catch (const ffd::InputError& e) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+      return kExitBadInput;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-      status = kExitBadInput;
+      return kExitBadInput;
     }
-    if (counters.commands_unrecorded > 0) {
-      // Written anyway (it holds all that arrived), but it will not replay this session.
-      std::fprintf(stderr, "ffdsim: error: %s: %llu applied commands were lost before the recorder read them\n",
-                   o.record_path.c_str(), static_cast<unsigned long long>(counters.commands_unrecorded));
-      status = kExitBadInput;
+    figures.scene_path = r.scene_path;
+    figures.compute_ns = std::move(r.compute_ns);
+    figures.lateness_ns = std::move(r.lateness_ns);
+    figures.counters = r.counters;
+    figures.finite = r.finite;
+    figures.log = std::move(r.log);
+    figures.ui = {{"renderer", r.renderer},         {"frames", r.ui_frames},
+                  {"frame_mean_ms", r.ui_frame_mean_ms}, {"frame_max_ms", r.ui_frame_max_ms},
+                  {"png_frames", r.frames_written}, {"script_events", r.script_events},
+                  {"script_events_done", r.script_events_done}};
+    if (script && r.script_events_done < r.script_events && !g_interrupted) {
+      std::fprintf(stderr, "ffdsim: error: %s: the run ended after %zu of %zu inputs\n", o.input_script.c_str(),
+                   r.script_events_done, r.script_events);
+      status = kExitAssertionFailed;
     }
+    if (!o.frames_dir.empty() && !o.quiet)
+      std::printf("frames: %zu PNGs in %s/ (index: %s/frames.json)\n", r.frames_written, o.frames_dir.c_str(),
+                  o.frames_dir.c_str());
   }
-  return status;
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  const int report_status = report(o, model, figures);
+  if (!o.report_path.empty() && !o.quiet) std::printf("report: %s\n", o.report_path.c_str());
+  return status != kExitOk ? status : report_status;
 }
 
 }  // namespace ffdsim

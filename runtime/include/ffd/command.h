@@ -19,6 +19,7 @@ enum class CommandKind : std::uint8_t {
   SetBeta,       // value: friction, eq. 8, [0, 1]
   SetGravity,    // vector: m/s^2
   SetStiffness,  // object + value: N/m (mass_spring) or pull fraction in (0, 1] (shape_matching)
+  SetProbeStiffness,  // value: virtual coupling stiffness of the probe, N/m (>= 0)
   Reset,         // back to the scene's initial State (the step index keeps counting)
   // Loop commands: they steer the physics loop and leave the State alone.
   SetBudget,     // value: latency budget, microseconds (> 0)

@@ -16,6 +16,7 @@ struct TunableParams {
   double beta = 0.0;            // friction, eq. 8
   // (objects) per object: N/m per spring (mass_spring) or the pull fraction (shape_matching)
   std::vector<double> stiffness;
+  double probe_stiffness = 0.0;  // N/m, the probe's virtual coupling spring
 };
 
 // The haptic probe (the "probe" effect): the device position commanded from outside and the

@@ -1,0 +1,17 @@
+#include "app/ui_run.h"
+
+namespace ffd::ui {
+
+void collect_result(Viewer& viewer, UiRunResult& result) {
+  Session& session = viewer.session();
+  session.stop();
+  result.scene_path = session.scene_path();
+  result.compute_ns = session.compute_ns();
+  result.lateness_ns = session.lateness_ns();
+  result.counters = session.counters();
+  result.finite = session.history().finite;
+  result.log = session.log();
+  for (const ObjectModel& o : session.model().objects) result.model_object_names.push_back(o.name);
+}
+
+}  // namespace ffd::ui

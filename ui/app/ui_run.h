@@ -1,0 +1,45 @@
+#pragma once
+// Running the viewer on a platform: a GLFW window where there is a display, or headless on
+// EGL writing PNG frames. Both return the same figures for the run report.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/viewer.h"
+#include "ffd/ui_script.h"
+
+namespace ffd::ui {
+
+struct UiRunOptions {
+  ViewerOptions viewer;
+  std::optional<UiScript> script;  // drives the mouse and keys instead of a person
+  double seconds = 0.0;            // wall-clock limit; 0: until the window closes or the script ends
+  std::string frames_dir;          // headless: write PNGs here (and frames.json)
+  double fps = 10.0;               // frames per simulated second written
+  int width = 1280, height = 720;  // px
+  const volatile bool* interrupted = nullptr;  // set by a signal handler: end the run cleanly
+};
+
+struct UiRunResult {
+  std::string scene_path;
+  std::string renderer;            // GL_RENDERER and version
+  std::vector<std::int64_t> compute_ns, lateness_ns;  // every step's
+  LoopCounters counters;
+  bool finite = true;
+  Recording log;                   // every applied command and hash (for --record)
+  std::vector<std::string> model_object_names;
+  std::size_t ui_frames = 0;
+  double ui_frame_mean_ms = 0.0, ui_frame_max_ms = 0.0;  // wall time per UI frame
+  std::size_t frames_written = 0;
+  std::size_t script_events_done = 0, script_events = 0;
+};
+
+// Throws std::runtime_error when there is no usable display (the caller may fall back to
+// the headless run) and ffd::InputError for bad scenes or scripts.
+UiRunResult run_window(const UiRunOptions& options);
+UiRunResult run_headless(const UiRunOptions& options);
+
+// Where the figures shared by both come from.
+void collect_result(Viewer& viewer, UiRunResult& result);
+
+}  // namespace ffd::ui

@@ -1,0 +1,102 @@
+#pragma once
+// The interactive viewer: a scene on the physics loop, drawn with the SceneRenderer and
+// steered with ImGui panels and the mouse. Platform-free: the GLFW window and the headless
+// EGL runner both create a GL context, feed an InputState per frame and call frame().
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/input.h"
+#include "app/session.h"
+#include "render/camera.h"
+#include "render/scene_renderer.h"
+
+struct ImGuiContext;
+
+namespace ffd::ui {
+
+struct ViewerOptions {
+  std::string scene_path;       // the scene to open
+  std::string scenes_folder;    // the scene picker lists the *.toml files here
+  std::string recordings_folder = "out/recordings";
+  SessionOptions session;
+};
+
+struct PixelRect {
+  float x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // px from the top-left
+};
+
+enum class PointerMode { Grab, Probe };
+
+class Viewer {
+ public:
+  // Needs a current OpenGL 3.3 core context. Throws what Session throws for a bad scene.
+  explicit Viewer(const ViewerOptions& options);
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  // One UI frame: reads the newest physics frame, runs the panels and the pointer (which send
+  // commands), and draws everything, ImGui included, into the bound framebuffer.
+  void frame(const InputState& input, int width, int height, float dt_s);
+
+  bool quit_requested() const { return quit_; }
+  Session& session() { return *session_; }
+  const OrbitCamera& camera() const { return camera_; }
+  RenderOptions& render_options() { return render_options_; }
+  PointerMode mode() const { return mode_; }
+  // Where a named widget was drawn in the last frame ("alpha", "beta", "pause", ...), for
+  // scripted input; false if it was not drawn.
+  bool widget_rect(const std::string& name, PixelRect& rect) const;
+  // Pixel of an object's lattice centre in the last frame; false if unknown or behind.
+  bool object_pixel(const std::string& object, int width, int height, float& x, float& y) const;
+  // Messages for the user (errors, saved recordings), newest last.
+  const std::vector<std::string>& messages() const { return messages_; }
+
+ private:
+  void open_scene(const std::string& path);
+  void feed_imgui(const InputState& input, int width, int height, float dt_s);
+  void panels(int width, int height);
+  void scene_panel();
+  void tuning_panel();
+  void view_panel();
+  void record_panel();
+  void latency_panel(int width);
+  void help_overlay(int height);
+  void shortcuts(const InputState& input);
+  void pointer(const InputState& input, int width, int height);
+  void finish_pick(int width, int height);
+  void remember(const char* name);
+  void note(std::string message);
+  void send(const Command& command) { session_->send(command); }
+  void start_recording();
+  void stop_recording();
+
+  ViewerOptions options_;
+  std::unique_ptr<Session> session_;
+  std::unique_ptr<SceneRenderer> renderer_;
+  OrbitCamera camera_;
+  RenderOptions render_options_;
+  PointerMode mode_ = PointerMode::Grab;
+  bool quit_ = false, show_help_ = true;
+  std::vector<std::string> scene_files_;
+  std::map<std::string, PixelRect> widgets_;
+  std::vector<std::string> messages_;
+  // Values of the tunables the frame does not carry, as last sent.
+  std::vector<float> stiffness_;
+  float probe_stiffness_ = 0.0f, budget_us_ = 1000.0f;
+  // Pointer state.
+  InputState previous_;
+  SurfacePick pick_;
+  bool grabbing_ = false, probing_ = false;
+  Vec3f drag_plane_point_ = Vec3f::Zero();  // the drag / probe moves in the view plane through this point
+  Vec3 last_target_ = Vec3::Zero();
+  // Recording.
+  bool recording_ = false;
+  std::string recording_path_;
+  char recording_path_edit_[512] = {};
+  ImGuiContext* imgui_ = nullptr;
+};
+
+}  // namespace ffd::ui

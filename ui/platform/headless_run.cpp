@@ -1,0 +1,81 @@
+// The viewer without a window: EGL surfaceless context, offscreen framebuffer, PNG frames.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "app/scripted_input.h"
+#include "app/ui_run.h"
+#include "platform/headless_gl.h"
+
+namespace ffd::ui {
+
+UiRunResult run_headless(const UiRunOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const int width = options.script ? options.script->width : options.width;
+  const int height = options.script ? options.script->height : options.height;
+  HeadlessGl gl(width, height);
+  gl.bind();
+  Viewer viewer(options.viewer);
+  UiRunResult result;
+  result.renderer = gl.renderer();
+  std::optional<ScriptedInput> script;
+  if (options.script) script.emplace(*options.script);
+  const double dt = viewer.session().model().settings.dt;
+  const std::uint64_t capture_every =
+      std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(1.0 / (options.fps * dt))));
+  std::uint64_t next_capture = 0;
+  nlohmann::json index = nlohmann::json::array();
+
+  // A display's pace: at most 60 frames per second of wall time.
+  constexpr auto kFramePeriod = std::chrono::microseconds(16'667);
+  const auto start = Clock::now();
+  auto previous = start;
+  double frame_ms_sum = 0.0;
+  for (;;) {
+    const auto now = Clock::now();
+    const std::uint64_t step = viewer.session().newest_step();
+    if (options.interrupted && *options.interrupted) break;
+    if (script ? script->finished(step, dt) : std::chrono::duration<double>(now - start).count() >= options.seconds) break;
+    if (options.seconds > 0.0 && script && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
+    if (viewer.quit_requested()) break;
+    const InputState input = script ? script->next(viewer, step, dt, width, height) : InputState{};
+    gl.bind();
+    viewer.frame(input, width, height, std::chrono::duration<float>(now - previous).count());
+    previous = now;
+    const std::uint64_t shown = viewer.session().newest_step();
+    if (!options.frames_dir.empty() && shown >= next_capture && viewer.session().frame()) {
+      char name[64];
+      std::snprintf(name, sizeof name, "frame_%05zu.png", result.frames_written);
+      write_png((std::filesystem::path(options.frames_dir) / name).string(), width, height, gl.read_pixels());
+      index.push_back({{"file", name}, {"step", shown}});
+      ++result.frames_written;
+      next_capture = shown - shown % capture_every + capture_every;
+    }
+    ++result.ui_frames;
+    const double frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - now).count();
+    frame_ms_sum += frame_ms;
+    result.ui_frame_max_ms = std::max(result.ui_frame_max_ms, frame_ms);
+    std::this_thread::sleep_until(now + kFramePeriod);
+  }
+  result.ui_frame_mean_ms = result.ui_frames ? frame_ms_sum / static_cast<double>(result.ui_frames) : 0.0;
+  if (script) {
+    result.script_events_done = script->events_done();
+    result.script_events = script->script().events.size();
+  }
+  collect_result(viewer, result);
+  if (!options.frames_dir.empty()) {
+    const nlohmann::json j = {{"scene", result.scene_path}, {"width", width}, {"height", height},
+                              {"renderer", result.renderer}, {"frames", index}};
+    const std::string path = (std::filesystem::path(options.frames_dir) / "frames.json").string();
+    std::ofstream out(path);
+    out << j.dump(1) << '\n';
+    if (!out) throw std::runtime_error(path + ": cannot write the frame index");
+  }
+  return result;
+}
+
+}  // namespace ffd::ui
