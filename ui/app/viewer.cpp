@@ -137,6 +137,7 @@ void Viewer::open_scene(const std::string& path) {
   budget_us_ = static_cast<float>(options_.session.loop.budget_ns) * 1e-3f;
   grabbing_ = probing_ = false;
   recording_ = false;
+  sent_.clear();
   // Frame the objects at rest.
   Vec3 lo = session_->model().node_rest.front(), hi = lo;
   for (const Vec3& p : session_->model().node_rest) {

@@ -51,6 +51,8 @@ class Viewer {
   bool widget_rect(const std::string& name, PixelRect& rect) const;
   // Pixel of an object's lattice centre in the last frame; false if unknown or behind.
   bool object_pixel(const std::string& object, int width, int height, float& x, float& y) const;
+  // Every command the UI sent, with the step it was stamped for (kNextStep: the next tick).
+  const std::vector<Command>& sent_commands() const { return sent_; }
   // Messages for the user (errors, saved recordings), newest last.
   const std::vector<std::string>& messages() const { return messages_; }
 
@@ -69,7 +71,10 @@ class Viewer {
   void finish_pick(int width, int height);
   void remember(const char* name);
   void note(std::string message);
-  void send(const Command& command) { session_->send(command); }
+  void send(Command command) {
+    command.step = session_->send(command);
+    sent_.push_back(command);
+  }
   void start_recording();
   void stop_recording();
 
@@ -83,6 +88,7 @@ class Viewer {
   std::vector<std::string> scene_files_;
   std::map<std::string, PixelRect> widgets_;
   std::vector<std::string> messages_;
+  std::vector<Command> sent_;
   // Values of the tunables the frame does not carry, as last sent.
   std::vector<float> stiffness_;
   float probe_stiffness_ = 0.0f, budget_us_ = 1000.0f;

@@ -353,7 +353,7 @@ void SceneRenderer::draw(const Frame& frame, const OrbitCamera& camera, int widt
   }
 
   if (options.planes) draw_planes(view_projection, camera);
-  if (has(model_.settings.effects, Effect::Probe))
+  if (options.probe && has(model_.settings.effects, Effect::Probe))
     draw_sphere(view_projection, eye, to_float(frame.probe.x), static_cast<float>(model_.settings.probe.radius),
                 Vec3f(0.85f, 0.85f, 0.9f));
 

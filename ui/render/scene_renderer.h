@@ -17,6 +17,7 @@ namespace ffd::ui {
 
 struct RenderOptions {
   bool planes = true;
+  bool probe = true;         // the probe's sphere proxy (scenes with the "probe" effect)
   bool lattice = false;      // lattice cell edges
   bool boxes = false;        // FFD AABBs (the box of each surface cell's 9 nodes)
   bool contacts = true;      // this step's contacts: point and normal
