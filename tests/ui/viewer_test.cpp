@@ -45,12 +45,25 @@ struct HeadlessViewer {
     viewer.frame(input, gl.width(), gl.height(), 1.0f / 60.0f);
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  // Runs the script to its end (bounded in wall time).
-  void run(ScriptedInput& script) {
+  // Runs the script to its end, then `settle_steps` more steps with the last input held,
+  // counted from when the last command the UI sent was applied: a loaded machine may give
+  // the UI thread few frames, so the script's moves can land late (bounded in wall time).
+  void run(ScriptedInput& script, std::uint64_t settle_steps = 0) {
     const double dt = viewer.session().model().settings.dt;
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    while (!script.finished(viewer.session().newest_step(), dt) && std::chrono::steady_clock::now() < give_up)
-      frame(script.next(viewer, viewer.session().newest_step(), dt, gl.width(), gl.height()));
+    InputState input;
+    while (!script.finished(viewer.session().newest_step(), dt) && std::chrono::steady_clock::now() < give_up) {
+      input = script.next(viewer, viewer.session().newest_step(), dt, gl.width(), gl.height());
+      frame(input);
+    }
+    input.pressed.clear();
+    input.wheel = 0.0f;
+    const auto settled = [&] {
+      const auto& applied = viewer.session().log().commands;
+      const std::uint64_t last = applied.empty() ? 0 : applied.back().step;
+      return applied.size() >= viewer.sent_commands().size() && viewer.session().newest_step() >= last + settle_steps;
+    };
+    while (!settled() && std::chrono::steady_clock::now() < give_up) frame(input);
   }
 };
 
@@ -196,7 +209,7 @@ at_ms = 400
 offset = [0, -300]
 glide_ms = 500
 )"));
-  v.run(input);
+  v.run(input, 600);
   REQUIRE(input.events_done() == 3);
   const Session& s = v.viewer.session();
   const Model& model = s.model();
@@ -221,7 +234,7 @@ glide_ms = 500
 
 TEST_CASE("Viewer: a slider change reaches the physics thread at the step it was stamped for", "[viewer]") {
   const NoFpTraps no_traps;
-  HeadlessViewer v(kBoxes);
+  HeadlessViewer v(kBoxes, 200);
   ScriptedInput input(script(R"(
 duration_ms = 800
 [[input]]

@@ -26,7 +26,7 @@ Key key_from_name(const std::string& name) {
 }
 
 bool ScriptedInput::finished(std::uint64_t newest_step, double dt_s) const {
-  return newest_step >= to_steps(script_.duration_ms, dt_s);
+  return newest_step >= to_steps(script_.duration_ms, dt_s) && next_event_ >= script_.events.size() && !gliding_;
 }
 
 InputState ScriptedInput::next(const Viewer& viewer, std::uint64_t newest_step, double dt_s, int width, int height) {

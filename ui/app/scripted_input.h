@@ -17,7 +17,8 @@ class ScriptedInput {
   // Input for the next frame. Throws ffd::InputError naming the script line when an event
   // names an object or widget the viewer does not have.
   InputState next(const Viewer& viewer, std::uint64_t newest_step, double dt_s, int width, int height);
-  // The run has reached the script's duration.
+  // The run has reached the script's duration and every input has been given. (On a slow
+  // machine the UI may reach an input after its time: it is then given late, not skipped.)
   bool finished(std::uint64_t newest_step, double dt_s) const;
   std::size_t events_done() const { return next_event_; }
   const UiScript& script() const { return script_; }

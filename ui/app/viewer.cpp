@@ -23,7 +23,7 @@ constexpr const char* kFontPath = "/usr/share/fonts/truetype/dejavu/DejaVuSans.t
 constexpr float kFontSize = 15.0f;                                                    // px
 constexpr float kPanelWidth = 330.0f, kLatencyWidth = 380.0f, kMargin = 8.0f;         // px
 constexpr float kProbeWheelStep = 0.01f;  // m the probe moves along the view per wheel click
-constexpr double kProbeReach = 0.02;       // m the probe device may move per UI frame
+constexpr double kProbeSpeed = 1.0;        // m/s of wall time the probe device may move at most
 
 Vec3 to_double(const Vec3f& v) { return v.cast<double>(); }
 
@@ -206,7 +206,7 @@ void Viewer::frame(const InputState& input, int width, int height, float dt_s) {
   panels(width, height);
   const ImGuiIO& io = ImGui::GetIO();
   if (!io.WantCaptureKeyboard) shortcuts(input);
-  pointer(input, width, height);
+  pointer(input, width, height, dt_s);
   ImGui::Render();
 
   // Before the first step the objects are drawn at rest.
@@ -256,7 +256,7 @@ void Viewer::shortcuts(const InputState& input) {
   }
 }
 
-void Viewer::pointer(const InputState& input, int width, int height) {
+void Viewer::pointer(const InputState& input, int width, int height, float dt_s) {
   const ImGuiIO& io = ImGui::GetIO();
   const bool over_ui = io.WantCaptureMouse;
   const float dx = input.mouse_x - previous_.mouse_x, dy = input.mouse_y - previous_.mouse_y;
@@ -302,11 +302,12 @@ void Viewer::pointer(const InputState& input, int width, int height) {
     if (intersect_plane(ray, drag_plane_point_, view_normal, hit)) {
       Vec3 target = to_double(hit);
       if (probing_ && session_->frame()) {
-        // The device follows the cursor at a hand's pace (kProbeReach per UI frame), so a
-        // jump of the cursor never slams the probe into an object.
+        // The device follows the cursor at a hand's pace (kProbeSpeed), so a jump of the
+        // cursor never slams the probe into an object.
         const Vec3 device = session_->frame()->probe.device;
         const Vec3 move = target - device;
-        if (move.norm() > kProbeReach) target = device + move * (kProbeReach / move.norm());
+        const double reach = kProbeSpeed * std::clamp(static_cast<double>(dt_s), 0.002, 0.1);
+        if (move.norm() > reach) target = device + move * (reach / move.norm());
       }
       if ((target - last_target_).norm() > 1e-5) {  // 0.01 mm: don't flood the queue while still
         Command c;

@@ -67,7 +67,7 @@ class Viewer {
   void latency_panel(int width);
   void help_overlay(int height);
   void shortcuts(const InputState& input);
-  void pointer(const InputState& input, int width, int height);
+  void pointer(const InputState& input, int width, int height, float dt_s);
   void finish_pick(int width, int height);
   void remember(const char* name);
   void note(std::string message);
