@@ -427,7 +427,7 @@ void SceneRenderer::line(const Vec3f& a, const Vec3f& b, const std::array<float,
 
 void SceneRenderer::build_overlay_lines(const Frame& frame, const RenderOptions& options) {
   lines_.clear();
-  const std::array<float, 4> lattice_colour{0.75f, 0.8f, 0.9f, 0.35f}, box_colour{1.0f, 0.85f, 0.2f, 0.6f},
+  const std::array<float, 4> lattice_colour{0.75f, 0.8f, 0.9f, 0.35f}, box_colour{1.0f, 0.85f, 0.2f, 0.3f},
       grab_colour{1.0f, 1.0f, 1.0f, 0.9f}, force_colour{1.0f, 0.3f, 0.25f, 1.0f};
   if (options.lattice && frame.nodes.size() >= model_.node_rest.size()) {
     for (const std::array<Index, 8>& corners : model_.cell_nodes)
