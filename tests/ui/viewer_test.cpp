@@ -212,6 +212,11 @@ glide_ms = 500
 )"));
   v.run(input, 600);
   REQUIRE(input.events_done() == 3);
+  // Written frames are opaque where ImGui blended its panels, as the window shows them.
+  const std::vector<std::uint8_t> pixels = v.gl.read_pixels();
+  bool opaque = true;
+  for (std::size_t i = 3; i < pixels.size(); i += 4) opaque = opaque && pixels[i] == 255;
+  CHECK(opaque);
   const Session& s = v.viewer.session();
   const Model& model = s.model();
   const auto& commands = s.log().commands;

@@ -74,6 +74,8 @@ std::vector<std::uint8_t> HeadlessGl::read_pixels() const {
   glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer_);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  // Blending leaves alpha below 1 under the panels; the window shows them opaque.
+  for (std::size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;
   // OpenGL's rows run bottom-up; images run top-down.
   const std::size_t row = static_cast<std::size_t>(width_) * 4;
   for (int y = 0; y < height_ / 2; ++y)

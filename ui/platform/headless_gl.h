@@ -19,7 +19,7 @@ class HeadlessGl {
   int width() const { return width_; }
   int height() const { return height_; }
   void bind();  // makes the context current and binds the offscreen framebuffer
-  // RGBA pixels of the framebuffer, top row first.
+  // RGBA pixels of the framebuffer, top row first, opaque (as a window shows them).
   std::vector<std::uint8_t> read_pixels() const;
   std::string renderer() const;  // GL_RENDERER, GL_VERSION
 
