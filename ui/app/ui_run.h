@@ -1,6 +1,7 @@
 #pragma once
 // Running the viewer on a platform: a GLFW window where there is a display, or headless on
 // EGL writing PNG frames. Both return the same figures for the run report.
+#include <atomic>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,10 +15,11 @@ struct UiRunOptions {
   ViewerOptions viewer;
   std::optional<UiScript> script;  // drives the mouse and keys instead of a person
   double seconds = 0.0;            // wall-clock limit; 0: until the window closes or the script ends
+                                   // (headless without a script needs one)
   std::string frames_dir;          // headless: write PNGs here (and frames.json)
   double fps = 10.0;               // frames per simulated second written
   int width = 1280, height = 720;  // px
-  const volatile bool* interrupted = nullptr;  // set by a signal handler: end the run cleanly
+  const std::atomic<bool>* interrupted = nullptr;  // set by a signal handler: end the run cleanly
 };
 
 struct UiRunResult {

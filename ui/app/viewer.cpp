@@ -217,7 +217,7 @@ void Viewer::frame(const InputState& input, int width, int height, float dt_s) {
     frame = &rest;
   }
   renderer_->draw(*frame, camera_, width, height, render_options_, &pick_);
-  finish_pick(width, height);
+  finish_pick();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
   previous_ = input;
 }
@@ -320,7 +320,7 @@ void Viewer::pointer(const InputState& input, int width, int height, float dt_s)
   }
 }
 
-void Viewer::finish_pick(int, int) {
+void Viewer::finish_pick() {
   if (!pick_.requested) return;
   pick_.requested = false;
   const Frame* frame = session_->frame();

@@ -68,7 +68,7 @@ class Viewer {
   void help_overlay(int height);
   void shortcuts(const InputState& input);
   void pointer(const InputState& input, int width, int height, float dt_s);
-  void finish_pick(int width, int height);
+  void finish_pick();
   void remember(const char* name);
   void note(std::string message);
   void send(Command command) {

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/session.h"
 #include "app/ui_run.h"
 #include "commands.h"
 #include "ffd/physics_loop.h"
@@ -26,12 +27,9 @@ namespace ffdsim {
 
 namespace {
 
-volatile std::sig_atomic_t g_interrupted_signal = 0;
-volatile bool g_interrupted = false;
-extern "C" void on_interrupt(int) {
-  g_interrupted_signal = 1;
-  g_interrupted = true;
-}
+std::atomic<bool> g_interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+extern "C" void on_interrupt(int) { g_interrupted.store(true); }
 
 void print_distribution(const char* name, const ffd::TimeSummary& d) {
   std::printf("%-9s us: p50 %8.1f  p99 %8.1f  p99.9 %8.1f  max %8.1f\n", name, d.p50_us, d.p99_us, d.p999_us, d.max_us);
@@ -61,7 +59,7 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
   const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
   const ffd::TimeSummary lateness = ffd::summarize_times(f.lateness_ns);
   int status = f.finite ? kExitOk : kExitNonFinite;
-  const bool interrupted = g_interrupted_signal != 0;
+  const bool interrupted = g_interrupted.load();
   if (!o.quiet) {
     std::printf("%s (%s): %zu steps in real time at %.0f Hz, budget %.0f us%s\n", f.scene_path.c_str(), f.mode.c_str(),
                 steps, 1e6 / o.period_us, o.budget_us, interrupted ? " (interrupted)" : "");
@@ -132,44 +130,30 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
   return options;
 }
 
-// The physics loop alone, its queues read at a 60 Hz display's pace.
-RunFigures run_loop_only(const RunOptions& o, const ffd::Model& model, const std::string& scene_path) {
-  const ffd::LoopOptions options = loop_options(o);
-  ffd::PhysicsLoop loop(model, ffd::initial_state(model), options);
-  const double seconds = o.seconds > 0.0 ? o.seconds : 10.0;
+// The physics loop alone (a Session without a viewer), its queues read at a 60 Hz display's pace.
+RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
+  ffd::ui::SessionOptions options;
+  options.loop = loop_options(o);
+  ffd::ui::Session session(scene_path, options);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
+  while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
+    session.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(16));
+  }
+  session.stop();
   RunFigures f;
   f.scene_path = scene_path;
   f.mode = "headless loop";
-  const std::size_t expected_steps = static_cast<std::size_t>(seconds * 1e9 / static_cast<double>(options.period_ns)) + 16;
-  f.compute_ns.reserve(expected_steps);
-  f.lateness_ns.reserve(expected_steps);
-  f.log.scene_path = scene_path;
-  f.log.hash_every = static_cast<std::uint32_t>(o.hash_every);
-  auto drain = [&] {
-    ffd::Telemetry t;
-    while (loop.pop_telemetry(t)) {
-      f.compute_ns.push_back(t.compute_ns);
-      f.lateness_ns.push_back(t.lateness_ns);
-      f.finite = f.finite && t.finite;
-      f.log.steps = t.step;
-      if (t.has_hash) f.log.hashes.emplace_back(t.step, t.state_hash);
-    }
-    ffd::Command c;
-    while (loop.pop_applied_command(c)) f.log.commands.push_back(c);
-  };
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  loop.start();
-  while (std::chrono::steady_clock::now() < end && !g_interrupted && !loop.finished()) {
-    loop.latest_frame();
-    drain();
-    std::this_thread::sleep_for(std::chrono::milliseconds(16));
-  }
-  loop.request_stop();
-  loop.join();
-  drain();
-  f.counters = loop.counters();
+  f.compute_ns = session.compute_ns();
+  f.lateness_ns = session.lateness_ns();
+  f.counters = session.counters();
+  f.finite = session.history().finite;
+  f.log = session.log();
   return f;
 }
+
+// With a script and no --seconds, a wall-clock guard far beyond the script's own length.
+double script_guard_seconds(const ffd::UiScript& script) { return script.duration_ms * 1e-3 * 20.0 + 30.0; }
 
 }  // namespace
 
@@ -223,28 +207,27 @@ int run_run(const RunOptions& given) {
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (!o.record_path.empty()) ensure_parent_folder(o.record_path);
     if (!o.frames_dir.empty()) ensure_folder(o.frames_dir);
-    if (!o.frames_dir.empty() && !o.headless && !demo && !o.window && display_present())
+    if (!o.frames_dir.empty() && !o.headless && !demo)
       throw ffd::InputError("--frames writes the headless viewer's frames: add --headless");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
   }
 
-  g_interrupted_signal = 0;
-  g_interrupted = false;
+  g_interrupted.store(false);
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   RunFigures figures;
   int status = kExitOk;
   if (!viewer) {
-    figures = run_loop_only(o, model, scene_path);
+    figures = run_loop_only(o, scene_path);
   } else {
     ffd::ui::UiRunOptions u;
     u.viewer.scene_path = scene_path;
     u.viewer.session.loop = loop_options(o);
     u.script = script;
-    u.seconds = o.seconds > 0.0 ? o.seconds : (o.headless || demo) && !script ? 10.0 : 0.0;
-    if (script && o.seconds == 0.0) u.seconds = script->duration_ms * 1e-3 * 20.0 + 30.0;  // a guard, far beyond
+    const bool window = !o.headless && !demo;
+    u.seconds = o.seconds > 0.0 ? o.seconds : script ? script_guard_seconds(*script) : window ? 0.0 : 10.0;
     u.frames_dir = o.frames_dir;
     u.fps = o.fps;
     u.width = o.width;
@@ -252,7 +235,6 @@ int run_run(const RunOptions& given) {
     u.interrupted = &g_interrupted;
     ffd::ui::UiRunResult r;
     try {
-      const bool window = !o.headless && !demo;
       try {
         r = window ? ffd::ui::run_window(u) : ffd::ui::run_headless(u);
         figures.mode = window ? "window" : "headless viewer";
@@ -268,7 +250,7 @@ int run_run(const RunOptions& given) {
         ensure_parent_folder(o.report_path);
         if (!u.script) {
           u.script = ffd::load_ui_script_file(demo_script_path());
-          u.seconds = u.script->duration_ms * 1e-3 * 20.0 + 30.0;
+          u.seconds = script_guard_seconds(*u.script);
         }
         r = ffd::ui::run_headless(u);
         figures.mode = "headless viewer";
@@ -290,7 +272,7 @@ int run_run(const RunOptions& given) {
                   {"frame_mean_ms", r.ui_frame_mean_ms}, {"frame_max_ms", r.ui_frame_max_ms},
                   {"png_frames", r.frames_written}, {"script_events", r.script_events},
                   {"script_events_done", r.script_events_done}};
-    if (script && r.script_events_done < r.script_events && !g_interrupted) {
+    if (script && r.script_events_done < r.script_events && !g_interrupted.load()) {
       std::fprintf(stderr, "ffdsim: error: %s: the run ended after %zu of %zu inputs\n", o.input_script.c_str(),
                    r.script_events_done, r.script_events);
       status = kExitAssertionFailed;

@@ -115,7 +115,7 @@ UiRunResult run_window(const UiRunOptions& options) {
     double frame_ms_sum = 0.0;
     while (!glfwWindowShouldClose(window) && !viewer.quit_requested()) {
       const auto now = Clock::now();
-      if (options.interrupted && *options.interrupted) break;
+      if (options.interrupted && options.interrupted->load()) break;
       if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
       const std::uint64_t step = viewer.session().newest_step();
       if (script && script->finished(step, dt)) break;

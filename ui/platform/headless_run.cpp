@@ -15,6 +15,7 @@ namespace ffd::ui {
 
 UiRunResult run_headless(const UiRunOptions& options) {
   using Clock = std::chrono::steady_clock;
+  if (!options.script && options.seconds <= 0.0) throw std::invalid_argument("run_headless: a script or a time limit is needed");
   const int width = options.script ? options.script->width : options.width;
   const int height = options.script ? options.script->height : options.height;
   HeadlessGl gl(width, height);
@@ -38,9 +39,9 @@ UiRunResult run_headless(const UiRunOptions& options) {
   for (;;) {
     const auto now = Clock::now();
     const std::uint64_t step = viewer.session().newest_step();
-    if (options.interrupted && *options.interrupted) break;
-    if (script ? script->finished(step, dt) : std::chrono::duration<double>(now - start).count() >= options.seconds) break;
-    if (options.seconds > 0.0 && script && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
+    if (options.interrupted && options.interrupted->load()) break;
+    if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
+    if (script && script->finished(step, dt)) break;
     if (viewer.quit_requested()) break;
     const InputState input = script ? script->next(viewer, step, dt, width, height) : InputState{};
     gl.bind();
