@@ -71,6 +71,24 @@ value = "0123456789abcdef"
   CHECK(s.hashes[0].value == 0x0123456789abcdefull);
 }
 
+TEST_CASE("Replay scripts: a probe stiffness event reads and a recording writes it back") {
+  const LoadedReplay replay = parse(script_with("[[event]]\nat_ms = 20\nprobe_stiffness = 800.0\n"));
+  REQUIRE(replay.script.commands.size() == 1);
+  const Command& c = replay.script.commands[0];
+  CHECK(c.kind == CommandKind::SetProbeStiffness);
+  CHECK(c.value == 800.0);
+  Recording recording;
+  recording.scene_path = kScene;
+  recording.steps = 200;
+  recording.commands.push_back(c);
+  const LoadedReplay again = parse(recording_text(replay.model, recording));
+  REQUIRE(again.script.commands.size() == 1);
+  CHECK(again.script.commands[0].kind == CommandKind::SetProbeStiffness);
+  CHECK(again.script.commands[0].value == 800.0);
+  CHECK_THROWS_WITH(parse(script_with("[[event]]\nat_ms = 20\nprobe_stiffness = -1.0\n")),
+                    "test.toml:6:19: event[0].probe_stiffness: must be >= 0 (got -1)");
+}
+
 TEST_CASE("Replay scripts: malformed scripts name the file, line, column and field") {
   struct Case {
     const char* what;

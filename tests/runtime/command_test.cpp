@@ -124,3 +124,33 @@ TEST_CASE("Commands: malformed ones are refused") {
   stiffness.value = 0.0;
   CHECK_FALSE(command_is_valid(model, stiffness));
 }
+
+TEST_CASE("Commands: the probe coupling stiffness is tuned live and reset") {
+  const Model model = resting_box();
+  const State initial = initial_state(model);
+  CHECK(initial.params.probe_stiffness == model.settings.probe.coupling_stiffness);
+  Command stiffer = command(CommandKind::SetProbeStiffness);
+  stiffer.value = 3000.0;
+  REQUIRE(command_is_valid(model, stiffer));
+  Command negative = stiffer;
+  negative.value = -1.0;
+  CHECK_FALSE(command_is_valid(model, negative));
+
+  // The device held 5 cm from the proxy, far above the box: the coupling force follows k.
+  auto force_after_one_step = [&](const Command* c) {
+    State state = initial;
+    if (c) apply_command(model, initial, state, *c);
+    state.probe.device = state.probe.device_previous = state.probe.x + Vec3(0.05, 0.0, 0.0);
+    run(model, state, 1);
+    return state.probe.force.norm();
+  };
+  const double default_force = force_after_one_step(nullptr), stiffer_force = force_after_one_step(&stiffer);
+  INFO("force " << default_force << " N at 300 N/m, " << stiffer_force << " N at 3000 N/m");
+  CHECK(stiffer_force > 5.0 * default_force);
+
+  State state = initial;
+  apply_command(model, initial, state, stiffer);
+  CHECK(state.params.probe_stiffness == 3000.0);
+  apply_command(model, initial, state, command(CommandKind::Reset));
+  CHECK(state.params.probe_stiffness == initial.params.probe_stiffness);
+}
