@@ -236,10 +236,15 @@ void collide_planes(const Model& model, State& state, Scratch& scratch, StageCou
   }
 }
 
-std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch) {
-  std::vector<std::pair<Index, Index>> pairs;
+void broad_phase_pairs(const Model& model, const Scratch& scratch, std::vector<std::pair<Index, Index>>& pairs) {
+  pairs.clear();
   for_each_candidate_pair(
       model, scratch, [](Index, Index) { return true; }, [&](Index a, Index b) { pairs.emplace_back(a, b); });
+}
+
+std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch) {
+  std::vector<std::pair<Index, Index>> pairs;
+  broad_phase_pairs(model, scratch, pairs);
   return pairs;
 }
 

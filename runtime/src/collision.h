@@ -51,5 +51,7 @@ void collide_planes(const Model& model, State& state, Scratch& scratch, StageCou
 
 // Candidate pairs the broad phase yields (each once), for tests and tools: (box a < box b).
 std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch);
+// The same into `pairs` (cleared first): no allocation once it has the capacity.
+void broad_phase_pairs(const Model& model, const Scratch& scratch, std::vector<std::pair<Index, Index>>& pairs);
 
 }  // namespace ffd
