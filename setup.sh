@@ -6,11 +6,16 @@ cd "$(dirname "$0")"
 packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libassimp-dev
           libcli11-dev nlohmann-json3-dev catch2 libbenchmark-dev libconcurrentqueue-dev
           libreaderwriterqueue-dev
+          # letter meshes: glyph outlines through FreeType (below), their caps triangulated by
+          # the GLU tessellator
+          libglu1-mesa-dev
           # the viewer: OpenGL through libepoxy, a GLFW window or EGL headless (Mesa: llvmpipe
           # without a GPU), Dear ImGui with FreeType and the DejaVu font, PNGs through stb,
           # and Xvfb + xauth for the window test
           libimgui-dev libepoxy-dev libglfw3-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
-          libfreetype-dev fonts-dejavu-core libstb-dev xvfb xauth)
+          libfreetype-dev fonts-dejavu-core libstb-dev xvfb xauth
+          # FCL: the broad-phase race in ffdsim bench
+          libfcl-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

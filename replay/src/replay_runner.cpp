@@ -112,6 +112,11 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       if (t.has_energy) track(t.energy_j, result.max_energy_j, result.max_energy_step);
       track(t.max_speed_m_s, result.max_speed_m_s, result.max_speed_step);
       track(t.max_penetration_m, result.max_penetration_m, result.max_penetration_step);
+      result.mean_contacts += t.contacts;  // summed here, divided at the end
+      if (t.step > script.contact.contacts_from_step && t.contacts < result.min_contacts) {
+        result.min_contacts = t.contacts;
+        result.min_contacts_step = t.step;
+      }
       track(t.probe_force_n.norm(), result.peak_force_n, result.peak_force_step);
       if (t.has_hash) {
         result.hashes.emplace_back(t.step, t.state_hash);
@@ -154,6 +159,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   const LoopCounters counters = loop.counters();
   result.commands_rejected = counters.commands_rejected;
   result.latency.steps = result.steps;
+  if (result.steps > 0) result.mean_contacts /= static_cast<double>(result.steps);
   result.latency.compute = summarize_times(compute_ns);
   result.latency.lateness = summarize_times(lateness_ns);
   result.latency.deadline_misses = counters.deadline_misses;
@@ -205,6 +211,18 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
               result.max_speed_step);
   check_upper(out, "contact.max_penetration_m", "", script.contact.max_penetration_m, result.max_penetration_m, "m",
               false, result.max_penetration_step);
+  if (script.contact.min_contacts) {
+    AssertionResult a;
+    a.name = "contact.min_contacts";
+    const bool measured = result.min_contacts != ~std::uint64_t{0};
+    a.measured = measured ? std::to_string(result.min_contacts) + " at step " + std::to_string(result.min_contacts_step) +
+                                " (mean over the run " + number(result.mean_contacts, "per step") + ")"
+                          : "no steps in the window";
+    a.limit = ">= " + std::to_string(*script.contact.min_contacts) + " every step from step " +
+              std::to_string(script.contact.contacts_from_step + 1);
+    a.passed = measured && result.min_contacts >= *script.contact.min_contacts;
+    out.push_back(a);
+  }
   for (std::size_t i = 0; i < script.gaps.size(); ++i) {
     const GapLimit& g = script.gaps[i];
     const std::string name = "gap[" + g.a + ", " + g.b + "]";
@@ -303,6 +321,7 @@ std::string replay_result_json(const ReplayScript& script, const ReplayResult& r
   j["scene"] = script.scene_origin;
   j["mode"] = result.pacing == Pacing::Fast ? "fast" : "realtime";
   j["steps"] = result.steps;
+  j["mean_contacts"] = result.mean_contacts;
   j["passed"] = result.passed();
   j["latency"] = {{"compute", dist(result.latency.compute)},
                   {"lateness", dist(result.latency.lateness)},

@@ -28,7 +28,7 @@ const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p
                                                     "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
                                                     "deadline_misses"};
 const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "speed_max_m_s"};
-const std::vector<std::string_view> kContactKeys = {"max_penetration_m"};
+const std::vector<std::string_view> kContactKeys = {"max_penetration_m", "min_contacts", "from_step", "from_ms"};
 const std::vector<std::string_view> kGapKeys = {"objects", "max_gap_m", "max_penetration_m", "from_step",
                                                 "from_ms", "to_step", "to_ms", "every_steps", "every_ms"};
 const std::vector<std::string_view> kForceKeys = {"max_n", "peak_min_n"};
@@ -351,6 +351,14 @@ class ScriptReader {
     if (const toml::table* contact = a.subtable("contact")) {
       const TableReader c(origin_, *contact, "assert.contact", kContactKeys);
       script.contact.max_penetration_m = optional_number(c, "max_penetration_m", kNonNegative);
+      if (c.has("min_contacts")) {
+        script.contact.min_contacts = static_cast<std::uint64_t>(c.integer("min_contacts", 0, 0, 1'000'000'000));
+        script.contact.contacts_from_step = time_of(c, "from", false).value_or(0);
+        if (script.contact.contacts_from_step >= script.steps)
+          c.fail_at(c.has("from_ms") ? "from_ms" : "from_step", "starts after the run's last step");
+      } else if (c.has("from_ms") || c.has("from_step")) {
+        c.fail_at(c.has("from_ms") ? "from_ms" : "from_step", "only used with 'min_contacts'");
+      }
     }
     if (const toml::table* force = a.subtable("force")) {
       const TableReader f(origin_, *force, "assert.force", kForceKeys);

@@ -7,6 +7,7 @@ namespace ffd {
 SpatialHashBroadPhase::SpatialHashBroadPhase(double hash_cell_size, Index table_size) {
   model_.hash_cell_size = hash_cell_size;
   model_.hash_table_size = table_size;
+  scratch_ = make_scratch(model_);  // sized for no boxes: find_pairs works before set_boxes
 }
 
 void SpatialHashBroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& boxes) {

@@ -35,7 +35,9 @@ void validate(const SceneSpec& spec) {
     const std::string w = "object '" + o.name + "'";
     require(std::isfinite(o.cell_size) && o.cell_size > 0.0, w + ".cell_size", "must be > 0 m (got " + fmt(o.cell_size) + ")");
     require(std::isfinite(o.mass) && o.mass > 0.0, w + ".mass", "must be > 0 kg (got " + fmt(o.mass) + ")");
-    require(is_finite(o.position) && is_finite(o.rotation_deg) && is_finite(o.velocity), w, "position, rotation and velocity must be finite");
+    require(is_finite(o.position) && is_finite(o.rotation_deg) && is_finite(o.velocity) && is_finite(o.angular_velocity), w,
+            "position, rotation, velocity and angular velocity must be finite");
+    require(o.subdivisions >= 0 && o.subdivisions <= 3, w + ".subdivide", "must be in 0..3");
     require(!o.mesh.triangles.empty(), w + ".mesh", "has no triangles");
     if (o.dynamics == DynamicsKind::MassSpring) {
       require(std::isfinite(o.mass_spring.stiffness) && o.mass_spring.stiffness > 0.0, w + ".mass_spring.stiffness", "must be > 0 N/m");
@@ -125,6 +127,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     obj.initial_rotation = rotation_from_degrees(o.rotation_deg);
     obj.initial_translation = o.position;
     obj.initial_velocity = o.velocity;
+    obj.initial_angular_velocity = o.angular_velocity;
 
     MeshCleanReport clean_report;
     try {
@@ -135,6 +138,12 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     log.push_back("object '" + o.name + "' (" + o.source + "): " + std::to_string(clean_report.input_vertices) +
                   " vertices, " + std::to_string(clean_report.input_triangles) + " triangles; " +
                   clean_report.summary());
+    if (o.subdivisions > 0) {
+      obj.surface = subdivide_mesh(obj.surface, o.subdivisions);
+      log.push_back("object '" + o.name + "': subdivided 1-to-4 " + std::to_string(o.subdivisions) + "x: " +
+                    std::to_string(obj.surface.vertices.size()) + " vertices, " +
+                    std::to_string(obj.surface.triangles.size()) + " triangles");
+    }
 
     LatticeBuild lattice;
     try {
@@ -331,9 +340,17 @@ State initial_state(const Model& model) {
   state.x.resize(model.node_count());
   state.v.resize(model.node_count());
   for (const ObjectModel& o : model.objects) {
+    Vec3 centre = Vec3::Zero();  // m, the placed lattice's centre of mass: the spin's axis passes through it
+    double mass = 0.0;
     for (Index n = o.node_begin; n < o.node_end; ++n) {
       state.x[n] = o.initial_rotation * model.node_rest[n] + o.initial_translation;
+      centre += model.node_mass[n] * state.x[n];
+      mass += model.node_mass[n];
+    }
+    centre /= mass;
+    for (Index n = o.node_begin; n < o.node_end; ++n) {
       state.v[n] = o.initial_velocity;
+      if (o.initial_angular_velocity != Vec3::Zero()) state.v[n] += o.initial_angular_velocity.cross(state.x[n] - centre);
     }
   }
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.

@@ -365,3 +365,33 @@ std::pair<Vec3, Vec3> mesh_bounds(const SurfaceMesh& mesh) {
 }
 
 }  // namespace ffd
+
+namespace ffd {
+
+SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels) {
+  if (levels < 0 || levels > 3) throw std::invalid_argument("subdivide_mesh: levels must be in 0..3, got " + std::to_string(levels));
+  SurfaceMesh out = mesh;
+  for (int level = 0; level < levels; ++level) {
+    SurfaceMesh next;
+    next.vertices = out.vertices;
+    next.triangles.reserve(4 * out.triangles.size());
+    std::map<std::pair<Index, Index>, Index> midpoint;  // undirected edge -> its new vertex
+    auto middle = [&](Index a, Index b) {
+      const auto key = std::minmax(a, b);
+      const auto [it, inserted] = midpoint.emplace(key, static_cast<Index>(next.vertices.size()));
+      if (inserted) next.vertices.push_back(0.5 * (out.vertices[key.first] + out.vertices[key.second]));
+      return it->second;
+    };
+    for (const auto& [a, b, c] : out.triangles) {
+      const Index ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
+      next.triangles.push_back({a, ab, ca});
+      next.triangles.push_back({ab, b, bc});
+      next.triangles.push_back({ca, bc, c});
+      next.triangles.push_back({ab, bc, ca});
+    }
+    out = std::move(next);
+  }
+  return out;
+}
+
+}  // namespace ffd

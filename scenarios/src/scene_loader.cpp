@@ -1,4 +1,4 @@
-// TOML scene files -> SceneSpec. The format is documented in scenarios/SCENE_FORMAT.md.
+// TOML scene files -> SceneSpec. The format is documented in README.md, "Scene format".
 // The loader is strict: unknown keys, wrong types, wrong lengths and out-of-range values
 // are all errors, each naming FILE:LINE:COL and the dotted field, so a typo in a scene
 // never silently falls back to a default.
@@ -17,15 +17,19 @@
 #include <optional>
 #include <sstream>
 #include <string_view>
+#include <tuple>
+#include <cstdio>
+#include <cctype>
 #include <vector>
 
+#include "ffd/glyph_mesh.h"
 #include "ffd/mesh_import.h"
 #include "ffd/toml_reader.h"
 
 namespace ffd {
 namespace {
 
-const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object", "probe", "grab"};
+const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object", "group", "probe", "grab"};
 const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_stiffness", "coupling_damping",
                                                   "start"};
 const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
@@ -34,10 +38,16 @@ const std::vector<std::string_view> kSimulationKeys = {
     "effects", "hash_table_size", "hash_cell_size", "min_box_thickness"};
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
-    "name",         "mesh",          "shape",         "size",           "radius",
-    "subdivisions", "scale",         "position",      "rotation_deg",   "velocity",
-    "cell_size",    "mass",          "fill_interior", "weld_tolerance", "min_component_fraction",
-    "mass_spring",  "shape_matching"};
+    "name",         "mesh",          "shape",          "glyph",          "size",
+    "radius",       "subdivisions",  "subdivide",      "scale",          "position",
+    "rotation_deg", "velocity",      "angular_velocity", "cell_size",    "mass",
+    "fill_interior", "weld_tolerance", "min_component_fraction", "mass_spring", "shape_matching"};
+// A group: `count` copies of one object description, placed on a grid, with random
+// velocities, spins and orientations drawn from simulation.seed.
+const std::vector<std::string_view> kGroupOnlyKeys = {"count", "layout", "random"};
+const std::vector<std::string_view> kLayoutKeys = {"grid", "spacing", "centre"};
+const std::vector<std::string_view> kRandomKeys = {"velocity", "angular_velocity", "rotation"};
+const std::vector<std::string_view> kGlyphKeys = {"text", "font", "em_size", "depth", "sample_spacing"};
 const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations"};
 const std::vector<std::string_view> kShapeMatchingKeys = {"stiffness", "region_half_width", "damping"};
 const std::vector<std::string_view> kShapeNames = {"box", "sphere"};
@@ -81,8 +91,11 @@ class SceneReader {
     for (std::size_t i = 0; i < planes.size(); ++i) scene.planes.push_back(read_plane(*planes[i], i));
 
     const auto objects = array_of_tables(root, "object");
-    if (objects.empty()) root.fail_here("object", "a scene needs at least one [[object]] table");
+    const auto groups = array_of_tables(root, "group");
+    if (objects.empty() && groups.empty())
+      root.fail_here("object", "a scene needs at least one [[object]] or [[group]] table");
     for (std::size_t i = 0; i < objects.size(); ++i) scene.objects.push_back(read_object(*objects[i], i));
+    for (std::size_t i = 0; i < groups.size(); ++i) read_group(*groups[i], i, scene);
     return scene;
   }
 
@@ -177,14 +190,16 @@ class SceneReader {
     return spec;
   }
 
+  static std::string misplaced_object_key(std::string_view key) {
+    if (contains(kMassSpringKeys, key) || contains(kShapeMatchingKeys, key)) {
+      return "it belongs in [object.mass_spring] or [object.shape_matching]";
+    }
+    return "";
+  }
+
   ObjectSpec read_object(const toml::table& table, std::size_t index) {
     const std::string path = "object[" + std::to_string(index) + "]";
-    const TableReader object(origin_, table, path, kObjectKeys, [](std::string_view key) -> std::string {
-      if (contains(kMassSpringKeys, key) || contains(kShapeMatchingKeys, key)) {
-        return "it belongs in [object.mass_spring] or [object.shape_matching]";
-      }
-      return "";
-    });
+    const TableReader object(origin_, table, path, kObjectKeys, misplaced_object_key);
     ObjectSpec spec;
 
     const auto name = object.string("name");
@@ -194,8 +209,109 @@ class SceneReader {
 
     const Vec3 scale = read_scale(object);
     spec.position = object.vec3("position", spec.position);
+    read_object_settings(object, spec);
+    // Last, because importing a mesh is the slow part: every cheap mistake is reported first.
+    if (object.has("glyph") && glyph_text(object).size() != 1)
+      object.fail_at("glyph", "an [[object]]'s glyph.text is one character (a [[group]] cycles through several)");
+    spec.mesh = read_surface(object, spec.source, 0);
+    scale_mesh(scale, spec.mesh);
+    return spec;
+  }
+
+  // [[group]]: `count` objects named NAME_0000, NAME_0001, ... (plus _C for a glyph C),
+  // one description, placed on layout.grid (x fastest, then z, then up the layers in y)
+  // around layout.centre, each with a random velocity, spin and orientation on top of the
+  // given ones. Glyph groups cycle through glyph.text.
+  void read_group(const toml::table& table, std::size_t index, SceneSpec& scene) {
+    const std::string path = "group[" + std::to_string(index) + "]";
+    std::vector<std::string_view> keys = kGroupOnlyKeys;
+    for (std::string_view key : kObjectKeys)
+      if (key != "position") keys.push_back(key);
+    const TableReader group(origin_, table, path, keys, misplaced_object_key);
+    const auto name = group.string("name");
+    if (!name) group.fail_missing("name");
+    const std::size_t count = static_cast<std::size_t>(group.integer("count", 0, 1, 100'000));
+    if (!group.has("count")) group.fail_missing("count", " (how many objects the group makes)");
+
+    const toml::table* layout_table = group.subtable("layout");
+    if (!layout_table) group.fail_missing("layout", " ([" + path + ".layout] with grid, spacing and centre)");
+    const TableReader layout(origin_, *layout_table, group.field("layout"), kLayoutKeys);
+    if (!layout.has("grid")) layout.fail_missing("grid", " ([nx, ny, nz]: objects per row, layers, rows)");
+    const Vec3 grid_numbers = layout.vec3("grid", Vec3::Ones(), Bounds{1.0, 10'000.0, false, false});
+    Vec3i grid;
+    for (int a = 0; a < 3; ++a) {
+      if (grid_numbers[a] != std::floor(grid_numbers[a])) layout.fail_at("grid", "expected whole numbers");
+      grid[a] = static_cast<int>(grid_numbers[a]);
+    }
+    if (static_cast<double>(grid.x()) * grid.y() * grid.z() < static_cast<double>(count)) {
+      layout.fail_at("grid", "holds " + std::to_string(grid.x() * grid.y() * grid.z()) + " places for " +
+                                 std::to_string(count) + " objects");
+    }
+    const Vec3 spacing = layout.vec3("spacing", Vec3::Zero(), kNonNegative);
+    if (!layout.has("spacing")) layout.fail_missing("spacing", " ([dx, dy, dz] in m)");
+    const Vec3 centre = layout.vec3("centre", Vec3::Zero());
+
+    Vec3 random_velocity = Vec3::Zero(), random_spin = Vec3::Zero();
+    bool random_rotation = false;
+    if (const toml::table* random_table = group.subtable("random")) {
+      const TableReader random(origin_, *random_table, group.field("random"), kRandomKeys);
+      random_velocity = random.vec3("velocity", random_velocity, kNonNegative);
+      random_spin = random.vec3("angular_velocity", random_spin, kNonNegative);
+      random_rotation = random.boolean("rotation", random_rotation);
+    }
+
+    const Vec3 scale = read_scale(group);
+    ObjectSpec base;
+    read_object_settings(group, base);
+    const std::u32string text = group.has("glyph") ? glyph_text(group) : std::u32string(1, U' ');
+    std::vector<SurfaceMesh> surfaces;
+    std::vector<std::string> sources(text.size());
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      surfaces.push_back(read_surface(group, sources[i], i));
+      scale_mesh(scale, surfaces.back());
+    }
+
+    // splitmix64 from the scene seed and the group index: the same numbers on every platform.
+    std::uint64_t random_state = scene.settings.seed * 0x9E3779B97F4A7C15ull + index + 1;
+    auto uniform = [&]() {  // in [-1, 1)
+      std::uint64_t z = (random_state += 0x9E3779B97F4A7C15ull);
+      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+      z ^= z >> 31;
+      return static_cast<double>(z >> 11) * 0x1.0p-52 - 1.0;
+    };
+    const int width = std::max<int>(1, static_cast<int>(std::log10(static_cast<double>(count - 1 + (count == 1)))) + 1);
+    for (std::size_t n = 0; n < count; ++n) {
+      ObjectSpec spec = base;
+      const std::size_t variant = n % text.size();
+      std::string number = std::to_string(n);
+      number.insert(0, static_cast<std::size_t>(std::max(0, width - static_cast<int>(number.size()))), '0');
+      spec.name = *name + "_" + number;
+      if (group.has("glyph") && text[variant] < 128 && std::isalnum(static_cast<int>(text[variant])))
+        spec.name += "_" + std::string(1, static_cast<char>(text[variant]));
+      check_unique(group, spec.name, object_names_, scene.objects.size());
+      const std::size_t i = n % static_cast<std::size_t>(grid.x());
+      const std::size_t k = (n / static_cast<std::size_t>(grid.x())) % static_cast<std::size_t>(grid.z());
+      const std::size_t j = n / (static_cast<std::size_t>(grid.x()) * static_cast<std::size_t>(grid.z()));
+      spec.position = centre + Vec3((static_cast<double>(i) - 0.5 * (grid.x() - 1)) * spacing.x(),
+                                    static_cast<double>(j) * spacing.y(),
+                                    (static_cast<double>(k) - 0.5 * (grid.z() - 1)) * spacing.z());
+      for (int a = 0; a < 3; ++a) spec.velocity[a] += random_velocity[a] * uniform();
+      for (int a = 0; a < 3; ++a) spec.angular_velocity[a] += random_spin[a] * uniform();
+      if (random_rotation)
+        for (int a = 0; a < 3; ++a) spec.rotation_deg[a] += 180.0 * uniform();
+      spec.mesh = surfaces[variant];
+      spec.source = sources[variant];
+      scene.objects.push_back(std::move(spec));
+    }
+  }
+
+  // Everything of an object but its name, position and surface (shared with [[group]]).
+  void read_object_settings(const TableReader& object, ObjectSpec& spec) const {
     spec.rotation_deg = object.vec3("rotation_deg", spec.rotation_deg);
     spec.velocity = object.vec3("velocity", spec.velocity);
+    spec.angular_velocity = object.vec3("angular_velocity", spec.angular_velocity);
+    spec.subdivisions = static_cast<int>(object.integer("subdivide", 0, 0, 3));
     spec.cell_size = object.number("cell_size", spec.cell_size, kPositive);
     spec.mass = object.number("mass", spec.mass, kPositive);
     spec.fill_interior = object.boolean("fill_interior", spec.fill_interior);
@@ -204,11 +320,35 @@ class SceneReader {
     spec.clean.min_component_fraction =
         object.number("min_component_fraction", spec.clean.min_component_fraction, kUnitInterval);
     read_dynamics(object, spec);
+  }
 
-    // Last, because importing a mesh is the slow part: every cheap mistake is reported first.
-    spec.mesh = read_surface(object, spec.source);
-    for (Vec3& vertex : spec.mesh.vertices) vertex = vertex.cwiseProduct(scale);
-    return spec;
+  static void scale_mesh(const Vec3& scale, SurfaceMesh& mesh) {
+    for (Vec3& vertex : mesh.vertices) vertex = vertex.cwiseProduct(scale);
+  }
+
+  // glyph.text as code points (UTF-8 in the file).
+  std::u32string glyph_text(const TableReader& object) const {
+    const toml::table* table = object.subtable("glyph");
+    if (!table) object.fail_at("glyph", "expected a table { text = \"A\", font = \"...ttf\", ... }");
+    const TableReader glyph(origin_, *table, object.field("glyph"), kGlyphKeys);
+    const auto text = glyph.string("text");
+    if (!text) glyph.fail_missing("text", " (the character(s) to extrude)");
+    std::u32string out;
+    const std::string& s = *text;
+    for (std::size_t i = 0; i < s.size();) {
+      const unsigned char c = static_cast<unsigned char>(s[i]);
+      const int length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+      if (length == 0 || i + static_cast<std::size_t>(length) > s.size()) glyph.fail_at("text", "is not valid UTF-8");
+      char32_t code = length == 1 ? c : c & (0x7F >> length);
+      for (int k = 1; k < length; ++k) {
+        const unsigned char next = static_cast<unsigned char>(s[i + static_cast<std::size_t>(k)]);
+        if ((next >> 6) != 0x2) glyph.fail_at("text", "is not valid UTF-8");
+        code = (code << 6) | (next & 0x3F);
+      }
+      out.push_back(code);
+      i += static_cast<std::size_t>(length);
+    }
+    return out;
   }
 
   Vec3 read_scale(const TableReader& object) const {
@@ -224,24 +364,30 @@ class SceneReader {
   }
 
   // The surface as written in the file (unscaled); `source` says where it came from.
-  SurfaceMesh read_surface(const TableReader& object, std::string& source) const {
-    const bool has_mesh = object.has("mesh");
-    const bool has_shape = object.has("shape");
-    if (has_mesh && has_shape) {
-      const bool shape_is_later =
-          object.find("shape")->source().begin.line >= object.find("mesh")->source().begin.line;
-      object.fail_at(shape_is_later ? "shape" : "mesh", "give either 'mesh' or 'shape', not both");
+  // `variant` picks the character of a glyph group.
+  SurfaceMesh read_surface(const TableReader& object, std::string& source, std::size_t variant) {
+    std::vector<std::string_view> given;
+    for (std::string_view key : {"mesh", "shape", "glyph"})
+      if (object.has(key)) given.push_back(key);
+    if (given.size() > 1) {
+      std::sort(given.begin(), given.end(), [&](std::string_view a, std::string_view b) {
+        return object.find(a)->source().begin.line < object.find(b)->source().begin.line;
+      });
+      object.fail_at(given.back(), "give one of 'mesh', 'shape' and 'glyph', not several");
     }
-    if (!has_mesh && !has_shape) {
+    if (given.empty()) {
       object.fail_here(object.path(),
-                       "needs a surface: 'mesh' (a file path) or 'shape' (\"box\" or \"sphere\")");
+                       "needs a surface: 'mesh' (a file path), 'shape' (\"box\" or \"sphere\") or 'glyph' "
+                       "(a letter of a font)");
     }
-    if (has_mesh) {
+    if (given.front() != "shape") {
       for (const std::string_view shape_key : {"size", "radius", "subdivisions"}) {
-        if (object.has(shape_key)) object.fail_at(shape_key, "only used with 'shape', not with 'mesh'");
+        if (object.has(shape_key))
+          object.fail_at(shape_key, "only used with 'shape', not with '" + std::string(given.front()) + "'");
       }
-      return read_mesh_file(object, source);
     }
+    if (given.front() == "mesh") return read_mesh_file(object, source);
+    if (given.front() == "glyph") return read_glyph(object, source, variant);
 
     source = *object.string("shape");
     if (!contains(kShapeNames, source)) {
@@ -263,6 +409,41 @@ class SceneReader {
         object.required_number("radius", kPositive, " (shape = \"sphere\" needs radius in m)");
     const int subdivisions = static_cast<int>(object.integer("subdivisions", 3, 0, 6));
     return make_sphere_mesh(radius, subdivisions);
+  }
+
+  // An extruded letter of a font (glyph_mesh.h); meshes are made once per character.
+  SurfaceMesh read_glyph(const TableReader& object, std::string& source, std::size_t variant) {
+    const std::u32string text = glyph_text(object);
+    const TableReader glyph(origin_, *object.subtable("glyph"), object.field("glyph"), kGlyphKeys);
+    GlyphMeshOptions options;
+    const auto font = glyph.string("font");
+    if (!font) glyph.fail_missing("font", " (a TrueType file, e.g. /usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf)");
+    std::filesystem::path resolved(*font);
+    if (resolved.is_relative() && !base_dir_.empty()) resolved = std::filesystem::path(base_dir_) / resolved;
+    options.font_path = resolved.lexically_normal().string();
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(options.font_path, error))
+      glyph.fail_at("font", "cannot find font file " + in_quotes(options.font_path) +
+                                " (Debian's fonts-dejavu-core installs /usr/share/fonts/truetype/dejavu/)");
+    options.character = text[variant % text.size()];
+    options.em_size = glyph.required_number("em_size", kPositive, " (m: the font size)");
+    options.depth = glyph.required_number("depth", kPositive, " (m: the extrusion)");
+    options.sample_spacing = glyph.required_number("sample_spacing", kPositive, " (m between outline samples)");
+    const auto key = std::make_tuple(options.font_path, options.character, options.em_size, options.depth,
+                                     options.sample_spacing);
+    source = options.font_path + " U+" + hex_code(options.character);
+    if (const auto cached = glyphs_.find(key); cached != glyphs_.end()) return cached->second;
+    try {
+      return glyphs_.emplace(key, make_glyph_mesh(options)).first->second;
+    } catch (const std::invalid_argument& e) {
+      glyph.fail_at("text", e.what());
+    }
+  }
+
+  static std::string hex_code(char32_t c) {
+    char buffer[16];
+    std::snprintf(buffer, sizeof buffer, "%04X", static_cast<unsigned>(c));
+    return buffer;
   }
 
   SurfaceMesh read_mesh_file(const TableReader& object, std::string& source) const {
@@ -328,6 +509,7 @@ class SceneReader {
   const std::string& base_dir_;
   std::map<std::string, std::size_t> object_names_;
   std::map<std::string, std::size_t> plane_names_;
+  std::map<std::tuple<std::string, char32_t, double, double, double>, SurfaceMesh> glyphs_;
 };
 
 }  // namespace

@@ -266,7 +266,7 @@ TEST_CASE("malformed scene files name the file, line, column and field", "[scene
                           ":12:8: object[1].name: duplicate name 'block' (also object[0])");
   }
   SECTION("both mesh and shape") {
-    require_fixture_error("bad_mesh_and_shape.toml", ":8:9: object[0].shape: give either 'mesh' or 'shape'");
+    require_fixture_error("bad_mesh_and_shape.toml", ":8:9: object[0].shape: give one of 'mesh', 'shape' and 'glyph', not several");
   }
   SECTION("both dynamics tables") {
     require_fixture_error("bad_two_dynamics.toml",
@@ -310,7 +310,7 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
   }
   SECTION("no objects") {
     require_error("[simulation]\neffects = []\n",
-                  "inline.toml:1:1: object: a scene needs at least one [[object]] table");
+                  "inline.toml:1:1: object: a scene needs at least one [[object]] or [[group]] table");
   }
   SECTION("[object] with single brackets") {
     require_error(
@@ -348,8 +348,8 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
   }
   SECTION("neither mesh nor shape") {
     require_error(scene_with_object("name = \"a\"\n[object.mass_spring]\n"),
-                  "inline.toml:3:1: object[0]: needs a surface: 'mesh' (a file path) or 'shape' (\"box\" or "
-                  "\"sphere\")");
+                  "inline.toml:3:1: object[0]: needs a surface: 'mesh' (a file path), 'shape' (\"box\" or "
+                  "\"sphere\") or 'glyph' (a letter of a font)");
   }
   SECTION("no dynamics table") {
     require_error(scene_with_object("name = \"a\"\nshape = \"sphere\"\nradius = 0.1\n"),

@@ -3,6 +3,7 @@
 // when chosen; run() returns the process exit code.
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 namespace ffdsim {
 
@@ -57,5 +58,16 @@ struct RunOptions {
 };
 void register_run(CLI::App& app, RunOptions& options);
 int run_run(const RunOptions& options);
+
+struct BenchOptions {
+  bool quick = false;
+  std::string out_dir = "out/bench";
+  std::vector<std::string> only;  // scenario keys; empty = all
+  std::string readme;             // Markdown file whose bench sections are replaced
+  int repetitions = 20;
+  bool quiet = false;
+};
+void register_bench(CLI::App& app, BenchOptions& options);
+int run_bench(const BenchOptions& options);
 
 }  // namespace ffdsim

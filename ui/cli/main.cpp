@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
   ffdsim::register_replay(app, replay);
   ffdsim::RunOptions run;
   ffdsim::register_run(app, run);
+  ffdsim::BenchOptions bench;
+  ffdsim::register_bench(app, bench);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -37,5 +39,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("simulate")) return ffdsim::run_simulate(simulate);
   if (app.got_subcommand("replay")) return ffdsim::run_replay_command(replay);
   if (app.got_subcommand("run")) return ffdsim::run_run(run);
+  if (app.got_subcommand("bench")) return ffdsim::run_bench(bench);
   return ffdsim::kExitUsage;
 }

@@ -36,6 +36,9 @@ struct ReplayResult {
   bool finite = true;
   std::optional<std::uint64_t> first_non_finite_step;
   double max_energy_j = 0, max_speed_m_s = 0, max_penetration_m = 0, peak_force_n = 0;
+  // Fewest contacts of one step from ContactLimits::contacts_from_step on, and that step.
+  std::uint64_t min_contacts = ~std::uint64_t{0}, min_contacts_step = 0;
+  double mean_contacts = 0.0;  // contacts per step over the whole run
   // The step each maximum above was reached at.
   std::uint64_t max_energy_step = 0, max_speed_step = 0, max_penetration_step = 0, peak_force_step = 0;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> hashes;  // (step, state hash) the run produced

@@ -33,6 +33,10 @@ struct StabilityLimits {
 
 struct ContactLimits {
   std::optional<double> max_penetration_m;  // deepest node-in-box depth r of any step
+  // Sustained contact: every step from `contacts_from_step` on answers at least this many
+  // contacts (inter + self + plane + probe), e.g. a pile that has formed and stays formed.
+  std::optional<std::uint64_t> min_contacts;
+  std::uint64_t contacts_from_step = 0;
 };
 
 // Measured on the embedded surfaces (outside the physics thread) every `every_steps` steps

@@ -44,6 +44,11 @@ struct MeshCleanReport {
 SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options,
                        MeshCleanReport& report);
 
+// `levels` rounds of 1-to-4 midpoint subdivision: every triangle becomes four, edge
+// midpoints shared by both triangles of an edge (the surface stays closed where it was).
+// The shape is unchanged; only the sampling gets finer.
+SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels);
+
 // Built-in shapes, centred at the origin, outward-facing.
 SurfaceMesh make_box_mesh(const Vec3& size);                 // size: full edge lengths, m
 SurfaceMesh make_sphere_mesh(double radius, int subdivisions);  // icosphere, 0..6 subdivisions

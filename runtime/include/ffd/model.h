@@ -36,6 +36,7 @@ struct ObjectModel {
   Mat3 initial_rotation = Mat3::Identity();
   Vec3 initial_translation = Vec3::Zero();  // m
   Vec3 initial_velocity = Vec3::Zero();     // m/s
+  Vec3 initial_angular_velocity = Vec3::Zero();  // rad/s, about the lattice's centre of mass
   Vec3 lattice_origin;            // m, corner of lattice cell (0,0,0) at rest
   Vec3i lattice_dims;             // cells per axis of the full regular grid
   Index node_begin = 0, node_end = 0;      // range in Model::node_*

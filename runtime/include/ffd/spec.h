@@ -60,10 +60,13 @@ struct ObjectSpec {
   Vec3 position = Vec3::Zero();     // m, translation applied after rotation
   Vec3 rotation_deg = Vec3::Zero(); // rotation about x, then y, then z (degrees)
   Vec3 velocity = Vec3::Zero();     // m/s, initial velocity of every lattice node
+  // rad/s, initial spin about the lattice's centre of mass: node velocity += w x (x - c)
+  Vec3 angular_velocity = Vec3::Zero();
   double cell_size = 0.05;          // m, FFD lattice cell edge
   double mass = 1.0;                // kg, whole object
   bool fill_interior = false;       // also keep interior cells (flood fill) for a solid feel
   MeshCleanOptions clean;
+  int subdivisions = 0;             // 1-to-4 midpoint subdivisions of the cleaned mesh (0..3)
   DynamicsKind dynamics = DynamicsKind::MassSpring;
   MassSpringParams mass_spring;
   ShapeMatchingParams shape_matching;

@@ -1,0 +1,67 @@
+#pragma once
+// The paper's Table 1, side by side with ours: every paper scenario run headless for a fixed
+// number of steps after a warm-up, with the collision-handling time per step (FFD AABB
+// update + broad phase + narrow phase with its responses + planes), the whole step and the
+// contacts per step. `ffdsim bench` prints it and writes it as Markdown and JSON.
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "bench/broad_phase_race.h"
+
+namespace ffdbench {
+
+// A row of the paper's Table 1 (Pentium D 3.0 GHz, 2 GB RAM), as printed there.
+struct PaperRow {
+  std::string name;       // "teapots"
+  double triangles = 0;   // in the scene
+  double cells = 0;       // FFD grid cells in the scene
+  double collision_ms = 0;  // collision handling per step
+};
+
+struct Scenario {
+  std::string key;         // "bunnies_soft": names the row and the recorded box sets
+  std::string scene_file;  // relative to the scenarios folder
+  PaperRow paper;
+  double target_p99_ms = 0;  // DESIGN.md's target for the collision step on 2 cores
+  std::uint64_t warmup_steps = 0, measured_steps = 0;  // full run
+  std::uint64_t quick_warmup_steps = 0, quick_measured_steps = 0;
+};
+
+// The paper's four experiments (bunnies twice: soft and hard springs).
+const std::vector<Scenario>& paper_scenarios();
+
+struct ScenarioResult {
+  Scenario scenario;
+  std::uint64_t warmup_steps = 0, measured_steps = 0;
+  std::size_t objects = 0, triangles = 0, cells = 0, boxes = 0, nodes = 0;
+  double load_s = 0;                          // scene file to compiled model, s
+  double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
+  double step_mean_ms = 0, step_p99_ms = 0;            // the whole step, dynamics included
+  double dynamics_mean_ms = 0;
+  double contacts_mean = 0;                   // inter + self + plane contacts per step
+  std::uint32_t contacts_max = 0;
+  double max_penetration_m = 0;               // deepest node-in-box depth of a measured step
+  bool finite = true;
+  std::string state_hash;                     // after the last step
+  std::vector<BoxSet> box_sets;               // early, mid-pile, settled (for the race)
+};
+
+// Progress: what runs ("alphabets: warm-up"), steps done and steps in all.
+using Progress = std::function<void(const std::string& what, std::uint64_t done, std::uint64_t total)>;
+
+// Loads, warms up and measures one scenario. Box sets are recorded at 15 % and 55 % of the
+// run and at its end. Throws on a bad scene file (the message names it).
+ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick,
+                              const Progress& progress);
+
+// "Intel(R) Xeon(R) ... (2 cores)" from /proc/cpuinfo, or "unknown CPU".
+std::string cpu_description();
+
+// The table as Markdown (with the machine and how it was measured) and as JSON.
+std::string markdown_table(const std::vector<ScenarioResult>& results, const std::string& cpu, bool quick);
+nlohmann::json to_json(const std::vector<ScenarioResult>& results);
+
+}  // namespace ffdbench

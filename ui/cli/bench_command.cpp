@@ -1,0 +1,168 @@
+// `ffdsim bench`: the paper's Table 1 beside ours, and the broad-phase race against FCL on
+// FFD AABBs recorded from the same runs. Progress bars on the terminal while it runs.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bench/broad_phase_race.h"
+#include "bench/paper_table.h"
+#include "commands.h"
+
+namespace ffdsim {
+
+namespace {
+
+// One line redrawn in place on a terminal; elsewhere (a CI log) a line per phase.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool quiet) : quiet_(quiet), terminal_(isatty(STDERR_FILENO) == 1) {}
+  void operator()(const std::string& what, std::uint64_t done, std::uint64_t total) {
+    if (quiet_) return;
+    if (!terminal_) {
+      if (what != last_) std::fprintf(stderr, "ffdsim bench: %s (%llu steps)\n", what.c_str(), static_cast<unsigned long long>(total));
+      last_ = what;
+      return;
+    }
+    constexpr int kWidth = 30;
+    const double fraction = total ? static_cast<double>(done) / static_cast<double>(total) : 1.0;
+    const int filled = static_cast<int>(fraction * kWidth);
+    std::string bar(static_cast<std::size_t>(filled), '#');
+    bar.resize(kWidth, '.');
+    std::fprintf(stderr, "\r\033[K%-28s [%s] %3d%%  %llu/%llu", what.c_str(), bar.c_str(), static_cast<int>(fraction * 100.0),
+                 static_cast<unsigned long long>(done), static_cast<unsigned long long>(total));
+    std::fflush(stderr);
+    last_ = what;
+  }
+  void finish_line(const std::string& text) {
+    if (quiet_) return;
+    std::fprintf(stderr, terminal_ ? "\r\033[K%s\n" : "%s\n", text.c_str());
+  }
+
+ private:
+  bool quiet_, terminal_;
+  std::string last_;
+};
+
+void write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+}
+
+// Replaces the text between "<!-- bench:NAME:begin -->" and "<!-- bench:NAME:end -->".
+std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
+                            const std::string& body) {
+  const std::string begin = "<!-- bench:" + name + ":begin -->", end = "<!-- bench:" + name + ":end -->";
+  const std::size_t b = text.find(begin), e = text.find(end);
+  if (b == std::string::npos || e == std::string::npos || e < b)
+    throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
+  return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
+}
+
+std::string today() {
+  const std::time_t now = std::time(nullptr);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
+  return buffer;
+}
+
+}  // namespace
+
+void register_bench(CLI::App& app, BenchOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "The paper's Table 1 beside ours (collision time per step of its four experiments) and the "
+               "broad-phase race against FCL, as Markdown and JSON");
+  cmd->add_flag("--quick", o.quick, "Short warm-up and measuring windows (a smoke run; figures indicative only)");
+  cmd->add_option("--out", o.out_dir, "Folder for table.md and bench.json")->capture_default_str();
+  cmd->add_option("--only", o.only, "Run only these scenarios (teapots, alphabets, happy_buddha, bunnies_soft, bunnies_hard)");
+  cmd->add_option("--update-readme", o.readme,
+                  "Also replace the bench sections (<!-- bench:table:begin --> ...) of this Markdown file");
+  cmd->add_option("--repetitions", o.repetitions, "Timed runs per broad phase and box set in the race")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
+}
+
+int run_bench(const BenchOptions& o) {
+  try {
+    std::vector<ffdbench::Scenario> chosen;
+    for (const ffdbench::Scenario& s : ffdbench::paper_scenarios())
+      if (o.only.empty() || std::find(o.only.begin(), o.only.end(), s.key) != o.only.end()) chosen.push_back(s);
+    for (const std::string& key : o.only) {
+      const auto& all = ffdbench::paper_scenarios();
+      if (std::none_of(all.begin(), all.end(), [&](const ffdbench::Scenario& s) { return s.key == key; }))
+        throw std::invalid_argument("--only: unknown scenario '" + key +
+                                    "' (teapots, alphabets, happy_buddha, bunnies_soft, bunnies_hard)");
+    }
+    std::string readme_text;
+    if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of benchmarking
+      std::ifstream in(o.readme);
+      if (!in) throw std::runtime_error(o.readme + ": cannot read");
+      std::ostringstream s;
+      s << in.rdbuf();
+      readme_text = s.str();
+      replace_section(replace_section(readme_text, o.readme, "table", ""), o.readme, "race", "");
+    }
+    ensure_folder(o.out_dir);
+
+    const std::string cpu = ffdbench::cpu_description();
+    ProgressBar progress(o.quiet);
+    std::vector<ffdbench::ScenarioResult> results;
+    bool finite = true;
+    for (const ffdbench::Scenario& scenario : chosen) {
+      results.push_back(ffdbench::bench_scenario(scenario, FFDSIM_SCENARIO_DIR, o.quick, std::ref(progress)));
+      const ffdbench::ScenarioResult& r = results.back();
+      finite = finite && r.finite;
+      char line[256];
+      std::snprintf(line, sizeof line, "%-13s collision %.3f ms mean, %.3f ms p99; step %.2f ms; %.0f contacts/step%s",
+                    r.scenario.key.c_str(), r.collision_mean_ms, r.collision_p99_ms, r.step_mean_ms, r.contacts_mean,
+                    r.finite ? "" : "; NOT FINITE");
+      progress.finish_line(line);
+    }
+
+    std::vector<ffdbench::RaceResult> race;
+    std::size_t sets = 0, missing = 0;
+    for (const ffdbench::ScenarioResult& r : results) sets += r.box_sets.size();
+    const int repetitions = o.quick ? std::min(o.repetitions, 5) : o.repetitions;
+    for (const ffdbench::ScenarioResult& r : results) {
+      for (const ffdbench::BoxSet& set : r.box_sets) {
+        progress("broad-phase race", race.size(), sets);
+        race.push_back(ffdbench::race(set, repetitions));
+        missing += race.back().missing_any;
+      }
+    }
+    progress.finish_line("broad-phase race: " + std::to_string(race.size()) + " box sets, " +
+                         (missing ? std::to_string(missing) + " FCL pairs missing from ours" : "every FCL pair among ours"));
+
+    const std::string table = ffdbench::markdown_table(results, cpu, o.quick);
+    const std::string race_table = ffdbench::markdown_table(race);
+    write_file(std::filesystem::path(o.out_dir) / "table.md",
+               "## The paper's Table 1 beside ours\n\n" + table + "\n## Broad-phase race\n\n" + race_table);
+    nlohmann::json json = {{"machine", {{"cpu", cpu}}},
+                           {"date", today()},
+                           {"quick", o.quick},
+                           {"scenarios", ffdbench::to_json(results)},
+                           {"broad_phase_race", ffdbench::to_json(race)}};
+    write_file(std::filesystem::path(o.out_dir) / "bench.json", json.dump(2) + "\n");
+    std::printf("%s\n%s", table.c_str(), race_table.c_str());
+    if (!o.readme.empty()) {
+      write_file(o.readme, replace_section(replace_section(readme_text, o.readme, "table", table), o.readme, "race",
+                                           race_table));
+      std::fprintf(stderr, "ffdsim bench: updated %s\n", o.readme.c_str());
+    }
+    std::fprintf(stderr, "ffdsim bench: wrote %s/table.md and %s/bench.json\n", o.out_dir.c_str(), o.out_dir.c_str());
+    if (!finite) return kExitNonFinite;
+    return missing ? kExitAssertionFailed : kExitOk;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+    return kExitBadInput;
+  }
+}
+
+}  // namespace ffdsim
