@@ -173,7 +173,7 @@ class SceneReader {
     const TableReader plane(origin_, table, "plane[" + std::to_string(index) + "]", kPlaneKeys);
     PlaneSpec spec;
     spec.name = plane.string("name").value_or("plane" + std::to_string(index));
-    check_unique(plane, spec.name, plane_names_, index);
+    check_unique(plane, spec.name, plane_names_);
     const Vec3 normal = plane.vec3("normal", spec.normal);
     if (normal == Vec3::Zero()) plane.fail_at("normal", "must be non-zero");
     // Normalised here so that `offset` means a distance along the unit normal, whatever
@@ -205,7 +205,7 @@ class SceneReader {
     const auto name = object.string("name");
     if (!name) object.fail_missing("name");
     spec.name = *name;
-    check_unique(object, spec.name, object_names_, index);
+    check_unique(object, spec.name, object_names_);
 
     const Vec3 scale = read_scale(object);
     spec.position = object.vec3("position", spec.position);
@@ -289,7 +289,7 @@ class SceneReader {
       spec.name = *name + "_" + number;
       if (group.has("glyph") && text[variant] < 128 && std::isalnum(static_cast<int>(text[variant])))
         spec.name += "_" + std::string(1, static_cast<char>(text[variant]));
-      check_unique(group, spec.name, object_names_, scene.objects.size());
+      check_unique(group, spec.name, object_names_);
       const std::size_t i = n % static_cast<std::size_t>(grid.x());
       const std::size_t k = (n / static_cast<std::size_t>(grid.x())) % static_cast<std::size_t>(grid.z());
       const std::size_t j = n / (static_cast<std::size_t>(grid.x()) * static_cast<std::size_t>(grid.z()));
@@ -345,6 +345,9 @@ class SceneReader {
         if ((next >> 6) != 0x2) glyph.fail_at("text", "is not valid UTF-8");
         code = (code << 6) | (next & 0x3F);
       }
+      const char32_t shortest[5] = {0, 0, 0x80, 0x800, 0x10000};  // smallest code of each length
+      if (code < shortest[length] || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF))
+        glyph.fail_at("text", "is not valid UTF-8");
       out.push_back(code);
       i += static_cast<std::size_t>(length);
     }
@@ -494,21 +497,21 @@ class SceneReader {
     }
   }
 
+  // `seen` maps each name to the table that declared it ("object[2]", "group[0]").
   void check_unique(const TableReader& table, const std::string& name,
-                    std::map<std::string, std::size_t>& seen, std::size_t index) const {
-    const auto [it, inserted] = seen.emplace(name, index);
+                    std::map<std::string, std::string>& seen) const {
+    const auto [it, inserted] = seen.emplace(name, table.path());
     if (inserted) return;
-    const std::string kind = table.path().substr(0, table.path().find('['));
-    const std::string problem = "duplicate name " + in_quotes(name) + " (also " + kind + "[" +
-                                std::to_string(it->second) + "]); names must be unique";
+    const std::string problem =
+        "duplicate name " + in_quotes(name) + " (also " + it->second + "); names must be unique";
     if (table.has("name")) table.fail_at("name", problem);
     table.fail_here(table.field("name"), problem);
   }
 
   const std::string& origin_;
   const std::string& base_dir_;
-  std::map<std::string, std::size_t> object_names_;
-  std::map<std::string, std::size_t> plane_names_;
+  std::map<std::string, std::string> object_names_;
+  std::map<std::string, std::string> plane_names_;
   std::map<std::tuple<std::string, char32_t, double, double, double>, SurfaceMesh> glyphs_;
 };
 

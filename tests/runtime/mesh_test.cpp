@@ -1,10 +1,12 @@
 #include "ffd/mesh.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -332,4 +334,128 @@ TEST_CASE("mesh_bounds gives the extreme coordinates", "[mesh]") {
   CHECK(lo == Vec3(-4, -2, -6));
   CHECK(hi == Vec3(2, 5, 3));
   CHECK_THROWS_AS(ffd::mesh_bounds(SurfaceMesh{}), std::invalid_argument);
+}
+
+namespace {
+
+double surface_area(const SurfaceMesh& mesh) {
+  double twice_area = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3& a = mesh.vertices[t[0]];
+    twice_area += (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).norm();
+  }
+  return twice_area / 2.0;
+}
+
+// Undirected edges, each once, as (smaller index, larger index).
+std::set<std::pair<Index, Index>> undirected_edges(const SurfaceMesh& mesh) {
+  std::set<std::pair<Index, Index>> edges;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
+  return edges;
+}
+
+// Every undirected edge is in exactly two triangles.
+bool every_edge_in_two_triangles(const SurfaceMesh& mesh) {
+  std::map<std::pair<Index, Index>, int> uses;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(t[k], t[(k + 1) % 3])];
+  return std::all_of(uses.begin(), uses.end(), [](const auto& use) { return use.second == 2; });
+}
+
+}  // namespace
+
+TEST_CASE("subdivide_mesh splits every triangle into four and keeps the shape", "[mesh]") {
+  const std::pair<const char*, SurfaceMesh> meshes[] = {
+      {"box", ffd::make_box_mesh({1, 2, 3})},
+      {"icosphere", ffd::make_sphere_mesh(0.5, 1)},
+      {"tetrahedron", tetrahedron()},
+  };
+  for (const auto& [name, mesh] : meshes) {
+    INFO(name);
+    REQUIRE(closed_and_consistent(mesh));
+    const std::set<std::pair<Index, Index>> edges = undirected_edges(mesh);
+    const SurfaceMesh fine = ffd::subdivide_mesh(mesh, 1);
+
+    CHECK(fine.triangles.size() == 4 * mesh.triangles.size());
+    // One new vertex per edge, shared by the edge's two triangles.
+    CHECK(fine.vertices.size() == mesh.vertices.size() + edges.size());
+    // The old vertices keep their places and indices; the new ones are edge midpoints.
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) REQUIRE(fine.vertices[v] == mesh.vertices[v]);
+    std::set<std::size_t> midpoints;
+    for (const auto& [a, b] : edges) {
+      const Vec3 middle = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
+      for (std::size_t v = mesh.vertices.size(); v < fine.vertices.size(); ++v)
+        if (fine.vertices[v] == middle) midpoints.insert(v);
+    }
+    CHECK(midpoints.size() == edges.size());
+
+    CHECK(closed_and_consistent(fine));
+    CHECK(every_edge_in_two_triangles(fine));
+    CHECK(undirected_edges(fine).size() == 2 * edges.size() + 3 * mesh.triangles.size());
+    // Euler characteristic unchanged: still one closed genus-0 surface.
+    const auto euler = [](const SurfaceMesh& m) {
+      return static_cast<long>(m.vertices.size()) - static_cast<long>(undirected_edges(m).size()) +
+             static_cast<long>(m.triangles.size());
+    };
+    CHECK(euler(fine) == 2);
+    CHECK(surface_area(fine) == Approx(surface_area(mesh)).epsilon(1e-12));
+    CHECK(signed_volume(fine) == Approx(signed_volume(mesh)).epsilon(1e-12));
+    CHECK(ffd::mesh_bounds(fine) == ffd::mesh_bounds(mesh));
+
+    // Levels compose: two levels are one level twice.
+    const SurfaceMesh finer = ffd::subdivide_mesh(mesh, 2);
+    const SurfaceMesh twice = ffd::subdivide_mesh(fine, 1);
+    CHECK(finer.triangles.size() == 16 * mesh.triangles.size());
+    CHECK(finer.vertices == twice.vertices);
+    CHECK(finer.triangles == twice.triangles);
+    CHECK(closed_and_consistent(finer));
+    CHECK(signed_volume(finer) == Approx(signed_volume(mesh)).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("subdivide_mesh sizes for the box and the icosphere", "[mesh]") {
+  // Box: 8 vertices, 18 edges, 12 triangles. Icosphere of 1 subdivision: 42, 120, 80.
+  const SurfaceMesh box = ffd::subdivide_mesh(ffd::make_box_mesh({1, 1, 1}), 1);
+  CHECK(box.vertices.size() == 26);
+  CHECK(box.triangles.size() == 48);
+  const SurfaceMesh sphere = ffd::subdivide_mesh(ffd::make_sphere_mesh(1.0, 1), 1);
+  CHECK(sphere.vertices.size() == 162);
+  CHECK(sphere.triangles.size() == 320);
+  const SurfaceMesh three = ffd::subdivide_mesh(ffd::make_box_mesh({1, 1, 1}), 3);
+  CHECK(three.triangles.size() == 12u * 64u);
+  CHECK(three.vertices.size() == 386);  // V = F / 2 + 2 for a closed genus-0 triangle mesh
+}
+
+TEST_CASE("subdivide_mesh keeps an open mesh's boundary open", "[mesh]") {
+  // A single triangle: 3 boundary edges become 6 boundary edges, the 3 inner ones are shared.
+  SurfaceMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}};
+  const SurfaceMesh fine = ffd::subdivide_mesh(mesh, 1);
+  CHECK(fine.vertices.size() == 6);
+  CHECK(fine.triangles.size() == 4);
+  std::map<std::pair<Index, Index>, int> uses;
+  for (const Triangle& t : fine.triangles)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(t[k], t[(k + 1) % 3])];
+  int boundary = 0, inner = 0;
+  for (const auto& [edge, count] : uses) (count == 1 ? boundary : inner) += 1;
+  CHECK(boundary == 6);
+  CHECK(inner == 3);
+  CHECK(surface_area(fine) == Approx(0.5).epsilon(1e-15));
+  // Every small triangle faces the same way as the big one (+z).
+  for (const Triangle& t : fine.triangles) {
+    const Vec3 normal = (fine.vertices[t[1]] - fine.vertices[t[0]]).cross(fine.vertices[t[2]] - fine.vertices[t[0]]);
+    CHECK(normal.z() > 0.0);
+  }
+}
+
+TEST_CASE("subdivide_mesh with 0 levels returns the mesh and rejects levels outside 0..3", "[mesh]") {
+  const SurfaceMesh sphere = ffd::make_sphere_mesh(1.0, 1);
+  const SurfaceMesh same = ffd::subdivide_mesh(sphere, 0);
+  CHECK(same.vertices == sphere.vertices);
+  CHECK(same.triangles == sphere.triangles);
+  CHECK_THROWS_AS(ffd::subdivide_mesh(sphere, 4), std::invalid_argument);
+  CHECK_THROWS_AS(ffd::subdivide_mesh(sphere, -1), std::invalid_argument);
+  CHECK_THROWS_WITH(ffd::subdivide_mesh(sphere, 4), Catch::Matchers::Contains("0..3") && Catch::Matchers::Contains("4"));
 }

@@ -3,8 +3,11 @@
 // names the exact file, line, column and field.
 #include "ffd/scene_loader.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ffd/mesh_import.h"
@@ -491,4 +494,534 @@ TEST_CASE("probe and grab tables are read, and only with their effects", "[scene
                 "inline.toml:4:10: probe.radius: must be > 0 (got -1)");
   require_error("[simulation]\neffects = [\"grab\"]\n[grab]\nstifness = 1.0\n[[object]]\n" + kBoxLines,
                 "inline.toml:4:1: grab.stifness: unknown key 'stifness'; did you mean 'stiffness'?");
+}
+
+// --- [[group]]: count copies on a grid with seeded random velocities, spins and rotations.
+
+namespace {
+
+// A scene whose [[group]] header is on line 4 and `group_lines` start on line 5.
+std::string scene_with_group(const std::string& group_lines, int seed = 7) {
+  return "[simulation]\neffects = []\nseed = " + std::to_string(seed) + "\n[[group]]\n" + group_lines;
+}
+// A box group body (lines 5..9) without `count` and `layout`; the next line is 10.
+const std::string kBoxGroupLines =
+    "name = \"g\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncell_size = 0.05\nmass_spring = {}\n";
+
+std::string box_group(int count, const std::string& layout, const std::string& extra = "") {
+  return kBoxGroupLines + "count = " + std::to_string(count) + "\nlayout = " + layout + "\n" + extra;
+}
+
+const std::string kFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+
+// glyph = { ... } with the given text and the other keys as in alphabets.toml (spacing
+// coarser, so that the meshes are quick to make).
+std::string glyph_line(const std::string& text, const std::string& font = kFont) {
+  return "glyph = { text = \"" + text + "\", font = \"" + font +
+         "\", em_size = 0.05, depth = 0.009, sample_spacing = 0.0005 }\n";
+}
+
+bool same_spec(const ffd::ObjectSpec& a, const ffd::ObjectSpec& b) {
+  return a.name == b.name && a.source == b.source && a.position == b.position && a.rotation_deg == b.rotation_deg &&
+         a.velocity == b.velocity && a.angular_velocity == b.angular_velocity && a.cell_size == b.cell_size &&
+         a.mass == b.mass && a.subdivisions == b.subdivisions && a.mesh.vertices == b.mesh.vertices &&
+         a.mesh.triangles == b.mesh.triangles;
+}
+
+}  // namespace
+
+TEST_CASE("a group makes count objects named by an index zero-padded to the width of count - 1",
+          "[scene_loader]") {
+  const auto names = [](int count) {
+    const ffd::SceneSpec scene = parse(scene_with_group(box_group(count, "{ grid = [200, 1, 1], spacing = [0.2, 0, 0] }")));
+    std::vector<std::string> out;
+    for (const ffd::ObjectSpec& object : scene.objects) out.push_back(object.name);
+    REQUIRE(out.size() == static_cast<std::size_t>(count));
+    return out;
+  };
+  CHECK(names(1) == std::vector<std::string>{"g_0"});
+  CHECK(names(3) == std::vector<std::string>{"g_0", "g_1", "g_2"});
+  const std::vector<std::string> ten = names(10);
+  CHECK(ten.front() == "g_0");
+  CHECK(ten.back() == "g_9");
+  const std::vector<std::string> eleven = names(11);
+  CHECK(eleven.front() == "g_00");
+  CHECK(eleven[9] == "g_09");
+  CHECK(eleven.back() == "g_10");
+  const std::vector<std::string> hundred = names(100);
+  CHECK(hundred.front() == "g_00");
+  CHECK(hundred.back() == "g_99");
+  const std::vector<std::string> hundred_one = names(101);
+  CHECK(hundred_one.front() == "g_000");
+  CHECK(hundred_one[42] == "g_042");
+  CHECK(hundred_one.back() == "g_100");
+}
+
+TEST_CASE("every object of a group shares the group's description", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(
+      "[simulation]\neffects = []\n[[object]]\nname = \"solo\"\nshape = \"sphere\"\nradius = 0.1\n"
+      "[object.mass_spring]\n[[group]]\nname = \"g\"\ncount = 3\nshape = \"box\"\nsize = [0.1, 0.2, 0.3]\n"
+      "scale = 2\ncell_size = 0.04\nmass = 0.5\nfill_interior = true\nsubdivide = 1\nrotation_deg = [10, 20, 30]\n"
+      "velocity = [1, 2, 3]\nangular_velocity = [4, 5, 6]\n"
+      "layout = { grid = [3, 1, 1], spacing = [1, 0, 0] }\n[group.shape_matching]\nstiffness = 0.25\n");
+  REQUIRE(scene.objects.size() == 4);
+  CHECK(scene.objects[0].name == "solo");  // [[object]]s first, then the groups' objects
+  const ffd::SurfaceMesh box = ffd::make_box_mesh({0.2, 0.4, 0.6});
+  for (std::size_t n = 1; n < 4; ++n) {
+    const ffd::ObjectSpec& o = scene.objects[n];
+    INFO(o.name);
+    CHECK(o.name == "g_" + std::to_string(n - 1));
+    CHECK(o.source == "box");
+    CHECK(o.mesh.vertices == box.vertices);
+    CHECK(o.mesh.triangles == box.triangles);
+    CHECK(o.cell_size == 0.04);
+    CHECK(o.mass == 0.5);
+    CHECK(o.fill_interior);
+    CHECK(o.subdivisions == 1);
+    CHECK(o.dynamics == ffd::DynamicsKind::ShapeMatching);
+    CHECK(o.shape_matching.stiffness == 0.25);
+    // Without a [group.random] table nothing is drawn: the stated values, exactly.
+    CHECK(o.rotation_deg == ffd::Vec3(10, 20, 30));
+    CHECK(o.velocity == ffd::Vec3(1, 2, 3));
+    CHECK(o.angular_velocity == ffd::Vec3(4, 5, 6));
+  }
+  // No centre: the grid is centred on the origin in x and z, the lowest layer at y = 0.
+  CHECK(scene.objects[1].position == ffd::Vec3(-1, 0, 0));
+  CHECK(scene.objects[2].position == ffd::Vec3(0, 0, 0));
+  CHECK(scene.objects[3].position == ffd::Vec3(1, 0, 0));
+}
+
+TEST_CASE("a group fills its grid x first then z then up the layers in y", "[scene_loader]") {
+  // 11 objects on a 2 x 3 x 2 grid (12 places). Spacings are binary fractions, so the
+  // positions are exact: x = 1 -/+ 0.25, y = 2 + 0.25 j, z = 3 -/+ 0.375.
+  const ffd::SceneSpec scene = parse(scene_with_group(
+      box_group(11, "{ grid = [2, 3, 2], spacing = [0.5, 0.25, 0.75], centre = [1.0, 2.0, 3.0] }")));
+  const std::vector<ffd::Vec3> expected = {
+      {0.75, 2.0, 2.625},  {1.25, 2.0, 2.625},  {0.75, 2.0, 3.375},  {1.25, 2.0, 3.375},
+      {0.75, 2.25, 2.625}, {1.25, 2.25, 2.625}, {0.75, 2.25, 3.375}, {1.25, 2.25, 3.375},
+      {0.75, 2.5, 2.625},  {1.25, 2.5, 2.625},  {0.75, 2.5, 3.375}};
+  REQUIRE(scene.objects.size() == expected.size());
+  for (std::size_t n = 0; n < expected.size(); ++n) {
+    INFO("object " << n);
+    CHECK(scene.objects[n].position == expected[n]);
+  }
+
+  SECTION("odd rows are centred on their middle object") {
+    const ffd::SceneSpec odd = parse(scene_with_group(
+        box_group(9, "{ grid = [3, 1, 3], spacing = [0.5, 1.0, 0.25], centre = [0.0, 1.0, 0.0] }")));
+    REQUIRE(odd.objects.size() == 9);
+    CHECK(odd.objects[0].position == ffd::Vec3(-0.5, 1.0, -0.25));
+    CHECK(odd.objects[1].position == ffd::Vec3(0.0, 1.0, -0.25));
+    CHECK(odd.objects[4].position == ffd::Vec3(0.0, 1.0, 0.0));
+    CHECK(odd.objects[8].position == ffd::Vec3(0.5, 1.0, 0.25));
+  }
+}
+
+TEST_CASE("a group's random values come from the seed and stay within their bounds", "[scene_loader]") {
+  const std::string random_group = box_group(
+      40, "{ grid = [4, 5, 2], spacing = [0.2, 0.2, 0.2] }",
+      "velocity = [1.0, -2.0, 0.5]\nangular_velocity = [0.1, 0.2, 0.3]\nrotation_deg = [10, 0, 0]\n"
+      "random = { velocity = [0.5, 0.0, 0.25], angular_velocity = [0.0, 3.0, 0.0], rotation = true }\n");
+  const ffd::SceneSpec first = parse(scene_with_group(random_group, 7));
+  REQUIRE(first.objects.size() == 40);
+
+  SECTION("the same seed gives identical objects") {
+    const ffd::SceneSpec again = parse(scene_with_group(random_group, 7));
+    REQUIRE(again.objects.size() == first.objects.size());
+    for (std::size_t n = 0; n < first.objects.size(); ++n) CHECK(same_spec(first.objects[n], again.objects[n]));
+  }
+  SECTION("another seed gives other values") {
+    const ffd::SceneSpec other = parse(scene_with_group(random_group, 8));
+    REQUIRE(other.objects.size() == first.objects.size());
+    std::size_t different = 0;
+    for (std::size_t n = 0; n < first.objects.size(); ++n) {
+      CHECK(other.objects[n].name == first.objects[n].name);
+      CHECK(other.objects[n].position == first.objects[n].position);
+      if (other.objects[n].velocity.x() != first.objects[n].velocity.x() &&
+          other.objects[n].angular_velocity.y() != first.objects[n].angular_velocity.y() &&
+          other.objects[n].rotation_deg != first.objects[n].rotation_deg)
+        ++different;
+    }
+    CHECK(different == first.objects.size());
+  }
+  SECTION("each value lies within its bound of the stated value and zero bounds keep it exactly") {
+    double widest_vx = 0.0, widest_vz = 0.0, widest_wy = 0.0, widest_rotation = 0.0;
+    for (const ffd::ObjectSpec& o : first.objects) {
+      INFO(o.name);
+      REQUIRE(std::isfinite(o.velocity.sum()));
+      REQUIRE(std::isfinite(o.angular_velocity.sum()));
+      REQUIRE(std::isfinite(o.rotation_deg.sum()));
+      CHECK(std::abs(o.velocity.x() - 1.0) <= 0.5);
+      CHECK(o.velocity.y() == -2.0);
+      CHECK(std::abs(o.velocity.z() - 0.5) <= 0.25);
+      CHECK(o.angular_velocity.x() == 0.1);
+      CHECK(std::abs(o.angular_velocity.y() - 0.2) <= 3.0);
+      CHECK(o.angular_velocity.z() == 0.3);
+      CHECK(std::abs(o.rotation_deg.x() - 10.0) <= 180.0);
+      CHECK(std::abs(o.rotation_deg.y()) <= 180.0);
+      CHECK(std::abs(o.rotation_deg.z()) <= 180.0);
+      widest_vx = std::max(widest_vx, std::abs(o.velocity.x() - 1.0));
+      widest_vz = std::max(widest_vz, std::abs(o.velocity.z() - 0.5));
+      widest_wy = std::max(widest_wy, std::abs(o.angular_velocity.y() - 0.2));
+      widest_rotation = std::max(widest_rotation, o.rotation_deg.cwiseAbs().maxCoeff());
+    }
+    // 40 draws spread over their ranges, not squeezed into a corner of them.
+    CHECK(widest_vx > 0.25);
+    CHECK(widest_vz > 0.125);
+    CHECK(widest_wy > 1.5);
+    CHECK(widest_rotation > 90.0);
+    CHECK(first.objects[0].velocity != first.objects[1].velocity);
+  }
+  SECTION("zero bounds and rotation = false give exactly the stated values") {
+    const ffd::SceneSpec fixed = parse(scene_with_group(box_group(
+        6, "{ grid = [6, 1, 1], spacing = [0.2, 0.2, 0.2] }",
+        "velocity = [1.0, -2.0, 0.5]\nangular_velocity = [0.1, 0.2, 0.3]\nrotation_deg = [10, 0, 0]\n"
+        "random = { velocity = [0.0, 0.0, 0.0], angular_velocity = [0.0, 0.0, 0.0], rotation = false }\n")));
+    for (const ffd::ObjectSpec& o : fixed.objects) {
+      CHECK(o.velocity == ffd::Vec3(1.0, -2.0, 0.5));
+      CHECK(o.angular_velocity == ffd::Vec3(0.1, 0.2, 0.3));
+      CHECK(o.rotation_deg == ffd::Vec3(10, 0, 0));
+    }
+  }
+  SECTION("two groups of one scene draw different values") {
+    const ffd::SceneSpec two = parse(scene_with_group(random_group) + "[[group]]\n" +
+                                     box_group(1, "{ grid = [1, 1, 1], spacing = [0, 0, 0] }",
+                                               "random = { velocity = [0.5, 0.0, 0.25] }\n"));
+    REQUIRE(two.objects.size() == 41);
+    CHECK(two.objects[40].velocity.x() != first.objects[0].velocity.x());
+  }
+}
+
+TEST_CASE("group errors name the file and line and column and field", "[scene_loader]") {
+  const std::string layout = "{ grid = [2, 2, 2], spacing = [0.2, 0.2, 0.2] }";
+  SECTION("missing count") {
+    require_error(scene_with_group(kBoxGroupLines + "layout = " + layout + "\n"),
+                  "inline.toml:4:1: group[0].count: missing required key (how many objects the group makes)");
+  }
+  SECTION("count out of range") {
+    require_error(scene_with_group(box_group(0, layout)),
+                  "inline.toml:10:9: group[0].count: must be in [1, 100000] (got 0)");
+  }
+  SECTION("missing layout") {
+    require_error(scene_with_group(kBoxGroupLines + "count = 2\n"),
+                  "inline.toml:4:1: group[0].layout: missing required key ([group[0].layout] with grid, "
+                  "spacing and centre)");
+  }
+  SECTION("layout without a grid") {
+    require_error(scene_with_group(box_group(2, "{ spacing = [0.2, 0.2, 0.2] }")),
+                  "inline.toml:11:10: group[0].layout.grid: missing required key ([nx, ny, nz]: objects per "
+                  "row, layers, rows)");
+  }
+  SECTION("layout without a spacing") {
+    require_error(scene_with_group(box_group(2, "{ grid = [2, 1, 1] }")),
+                  "inline.toml:11:10: group[0].layout.spacing: missing required key ([dx, dy, dz] in m)");
+  }
+  SECTION("a grid too small for the count") {
+    require_error(scene_with_group(box_group(9, layout)),
+                  "inline.toml:11:19: group[0].layout.grid: holds 8 places for 9 objects");
+  }
+  SECTION("a grid of fractions") {
+    require_error(scene_with_group(box_group(2, "{ grid = [2.5, 1, 1], spacing = [0.2, 0.2, 0.2] }")),
+                  "inline.toml:11:19: group[0].layout.grid: expected whole numbers");
+  }
+  SECTION("a grid with zero places along an axis") {
+    require_error(scene_with_group(box_group(2, "{ grid = [2, 0, 1], spacing = [0.2, 0.2, 0.2] }")),
+                  "inline.toml:11:23: group[0].layout.grid[1]: must be in [1, 10000] (got 0)");
+  }
+  SECTION("a negative spacing") {
+    require_error(scene_with_group(box_group(2, "{ grid = [2, 1, 1], spacing = [0.2, -0.1, 0.2] }")),
+                  "inline.toml:11:46: group[0].layout.spacing[1]: must be >= 0 (got -0.1)");
+  }
+  SECTION("an unknown key in the layout") {
+    require_error(scene_with_group(box_group(2, "{ grid = [2, 1, 1], spacing = [0.2, 0.2, 0.2], center = [0, 0, 0] }")),
+                  "inline.toml:11:57: group[0].layout.center: unknown key 'center'; did you mean 'centre'?");
+  }
+  SECTION("an unknown key in the random table") {
+    require_error(scene_with_group(box_group(2, layout, "random = { spin = [1, 1, 1] }\n")),
+                  "inline.toml:12:12: group[0].random.spin: unknown key 'spin' (valid keys: velocity, "
+                  "angular_velocity, rotation)");
+  }
+  SECTION("a negative random bound") {
+    require_error(scene_with_group(box_group(2, layout, "random = { velocity = [0.1, -0.1, 0.1] }\n")),
+                  "inline.toml:12:29: group[0].random.velocity[1]: must be >= 0 (got -0.1)");
+  }
+  SECTION("a position in a group: positions come from the layout") {
+    REQUIRE_THROWS_WITH(parse(scene_with_group(box_group(2, layout, "position = [0, 0, 0]\n"))),
+                        StartsWith("inline.toml:12:1: group[0].position: unknown key 'position'"));
+  }
+}
+
+TEST_CASE("a group's object names must not collide with other objects' names", "[scene_loader]") {
+  // The error points at the group's name (its objects' names are made from it).
+  const std::string group = box_group(2, "{ grid = [2, 1, 1], spacing = [1, 0, 0] }");
+  const std::string object = "[[object]]\nname = \"g_1\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\nmass_spring = {}\n";
+  const auto require_duplicate = [](const std::string& text, const std::string& position_and_name) {
+    REQUIRE_THROWS_AS(parse(text), ffd::SceneError);
+    REQUIRE_THROWS_WITH(parse(text), StartsWith("inline.toml:" + position_and_name + " (also ") &&
+                                         Contains("); names must be unique"));
+  };
+  SECTION("with an object table after the group in the file") {
+    require_duplicate(scene_with_group(group) + object, "5:8: group[0].name: duplicate name 'g_1'");
+  }
+  SECTION("with an object table before the group in the file") {
+    require_duplicate("[simulation]\neffects = []\n" + object + "[[group]]\n" + group,
+                      "9:8: group[0].name: duplicate name 'g_1'");
+  }
+  SECTION("with an earlier group's objects") {
+    const std::string second = "[[group]]\n" + box_group(1, "{ grid = [1, 1, 1], spacing = [0, 0, 0] }");
+    require_error(scene_with_group(group) + second,
+                  "inline.toml:13:8: group[1].name: duplicate name 'g_0' (also group[0]); names must be unique");
+  }
+}
+
+// --- glyph surfaces: extruded letters of a font.
+
+TEST_CASE("an object with a one-letter glyph is an extruded letter of the given depth", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(scene_with_object("name = \"a\"\n" + glyph_line("A") + "[object.mass_spring]\n"));
+  REQUIRE(scene.objects.size() == 1);
+  const ffd::ObjectSpec& a = scene.objects[0];
+  CHECK(a.name == "a");  // no _A: that suffix is for groups
+  CHECK(a.source == kFont + " U+0041");
+  REQUIRE_FALSE(a.mesh.vertices.empty());
+  REQUIRE_FALSE(a.mesh.triangles.empty());
+  const auto [lo, hi] = ffd::mesh_bounds(a.mesh);
+  CHECK(hi.z() - lo.z() == Approx(0.009).epsilon(1e-12));
+  CHECK(hi.x() - lo.x() > 0.01);  // a capital of a 5 cm font: a few cm wide and high
+  CHECK(hi.x() - lo.x() < 0.05);
+  CHECK(hi.y() - lo.y() > 0.01);
+  CHECK(hi.y() - lo.y() < 0.05);
+
+  SECTION("a scaled copy of a glyph leaves the other objects' copies alone") {
+    // The loader makes each glyph mesh once; scaling one object must not scale the others.
+    const ffd::SceneSpec two = parse(
+        "[simulation]\neffects = []\n[[object]]\nname = \"big\"\nscale = 2\n" + glyph_line("A") +
+        "mass_spring = {}\n[[object]]\nname = \"plain\"\n" + glyph_line("A") + "mass_spring = {}\n");
+    REQUIRE(two.objects.size() == 2);
+    REQUIRE(two.objects[0].mesh.vertices.size() == a.mesh.vertices.size());
+    CHECK(two.objects[1].mesh.vertices == a.mesh.vertices);
+    for (std::size_t v = 0; v < a.mesh.vertices.size(); ++v)
+      REQUIRE(two.objects[0].mesh.vertices[v] == 2.0 * a.mesh.vertices[v]);
+  }
+  SECTION("and it compiles") {
+    const ffd::SceneSpec small = parse(
+        scene_with_object("name = \"a\"\ncell_size = 0.012\n" + glyph_line("A") + "[object.mass_spring]\n"));
+    std::vector<std::string> log;
+    const ffd::Model model = ffd::compile(small, log);
+    REQUIRE(model.objects.size() == 1);
+    CHECK(model.cell_count() > 0);
+  }
+}
+
+TEST_CASE("a glyph group cycles through the letters of its text", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(scene_with_group(
+      "name = \"g\"\ncount = 5\n" + glyph_line("IOL") + "mass_spring = {}\n"
+      "layout = { grid = [5, 1, 1], spacing = [0.06, 0, 0] }\n"));
+  REQUIRE(scene.objects.size() == 5);
+  const std::vector<std::string> names = {"g_0_I", "g_1_O", "g_2_L", "g_3_I", "g_4_O"};
+  const std::vector<std::string> codes = {"0049", "004F", "004C", "0049", "004F"};
+  for (std::size_t n = 0; n < 5; ++n) {
+    CHECK(scene.objects[n].name == names[n]);
+    CHECK(scene.objects[n].source == kFont + " U+" + codes[n]);
+    const auto [lo, hi] = ffd::mesh_bounds(scene.objects[n].mesh);
+    CHECK(hi.z() - lo.z() == Approx(0.009).epsilon(1e-12));
+  }
+  // Object i gets letter i mod 3: objects 0 and 3 are the same I, and I, O, L differ.
+  CHECK(scene.objects[0].mesh.vertices.size() == scene.objects[3].mesh.vertices.size());
+  CHECK(scene.objects[0].mesh.vertices == scene.objects[3].mesh.vertices);
+  CHECK(scene.objects[0].mesh.triangles == scene.objects[3].mesh.triangles);
+  CHECK(scene.objects[1].mesh.vertices == scene.objects[4].mesh.vertices);
+  CHECK(scene.objects[0].mesh.vertices.size() != scene.objects[1].mesh.vertices.size());
+  CHECK(scene.objects[1].mesh.vertices.size() != scene.objects[2].mesh.vertices.size());
+  CHECK(scene.objects[0].mesh.vertices.size() != scene.objects[2].mesh.vertices.size());
+
+  SECTION("a letter that is no ASCII letter or digit adds no suffix") {
+    const ffd::SceneSpec accented = parse(scene_with_group(
+        "name = \"g\"\ncount = 2\n" + glyph_line("A\u00C9") + "mass_spring = {}\n"
+        "layout = { grid = [2, 1, 1], spacing = [0.06, 0, 0] }\n"));
+    REQUIRE(accented.objects.size() == 2);
+    CHECK(accented.objects[0].name == "g_0_A");
+    CHECK(accented.objects[1].name == "g_1");
+    CHECK(accented.objects[1].source == kFont + " U+00C9");
+  }
+}
+
+TEST_CASE("glyph errors name the file and line and column and field", "[scene_loader]") {
+  SECTION("several letters in an object table") {
+    require_error(scene_with_object("name = \"a\"\n" + glyph_line("AB") + "[object.mass_spring]\n"),
+                  "inline.toml:5:9: object[0].glyph: an [[object]]'s glyph.text is one character (a [[group]] "
+                  "cycles through several)");
+  }
+  SECTION("a missing font file") {
+    require_error(scene_with_object("name = \"a\"\n" + glyph_line("A", "/no/such/font.ttf") + "[object.mass_spring]\n"),
+                  "inline.toml:5:30: object[0].glyph.font: cannot find font file '/no/such/font.ttf' (Debian's "
+                  "fonts-dejavu-core installs /usr/share/fonts/truetype/dejavu/)");
+  }
+  SECTION("a missing font file in a group") {
+    REQUIRE_THROWS_WITH(
+        parse(scene_with_group("name = \"g\"\ncount = 2\n" + glyph_line("AB", "/no/such/font.ttf") +
+                               "mass_spring = {}\nlayout = { grid = [2, 1, 1], spacing = [0.06, 0, 0] }\n")),
+        StartsWith("inline.toml:7:31: group[0].glyph.font: cannot find font file '/no/such/font.ttf'"));
+  }
+  SECTION("missing sizes") {
+    const std::string head = "name = \"a\"\nglyph = { text = \"A\", font = \"" + kFont + "\"";
+    require_error(scene_with_object(head + ", depth = 0.009, sample_spacing = 0.0005 }\n[object.mass_spring]\n"),
+                  "inline.toml:5:9: object[0].glyph.em_size: missing required key (m: the font size)");
+    require_error(scene_with_object(head + ", em_size = 0.05, sample_spacing = 0.0005 }\n[object.mass_spring]\n"),
+                  "inline.toml:5:9: object[0].glyph.depth: missing required key (m: the extrusion)");
+    require_error(scene_with_object(head + ", em_size = 0.05, depth = 0.009 }\n[object.mass_spring]\n"),
+                  "inline.toml:5:9: object[0].glyph.sample_spacing: missing required key (m between outline "
+                  "samples)");
+  }
+  SECTION("missing text") {
+    require_error(scene_with_object("name = \"a\"\nglyph = { font = \"" + kFont +
+                                    "\", em_size = 0.05, depth = 0.009, sample_spacing = 0.0005 }\n[object.mass_spring]\n"),
+                  "inline.toml:5:9: object[0].glyph.text: missing required key (the character(s) to extrude)");
+  }
+  SECTION("an unknown key in the glyph table") {
+    REQUIRE_THROWS_WITH(parse(scene_with_object("name = \"a\"\nglyph = { text = \"A\", size = 0.05 }\n[object.mass_spring]\n")),
+                        StartsWith("inline.toml:5:23: object[0].glyph.size: unknown key 'size'"));
+  }
+  SECTION("a character the font does not have") {
+    require_error(scene_with_object("name = \"a\"\n" + glyph_line("\\uE000") + "[object.mass_spring]\n"),
+                  "inline.toml:5:18: object[0].glyph.text: " + kFont + ": no glyph for U+E000");
+  }
+  SECTION("a mesh and a glyph") {
+    require_error(scene_with_object("name = \"a\"\nmesh = \"unreadable.stl\"\n" + glyph_line("A") + "[object.mass_spring]\n"),
+                  "inline.toml:6:9: object[0].glyph: give one of 'mesh', 'shape' and 'glyph', not several");
+    require_error(scene_with_object("name = \"a\"\n" + glyph_line("A") + "shape = \"box\"\n[object.mass_spring]\n"),
+                  "inline.toml:6:9: object[0].shape: give one of 'mesh', 'shape' and 'glyph', not several");
+  }
+  SECTION("a shape key with a glyph") {
+    require_error(scene_with_object("name = \"a\"\n" + glyph_line("A") + "size = [1, 1, 1]\n[object.mass_spring]\n"),
+                  "inline.toml:6:8: object[0].size: only used with 'shape', not with 'glyph'");
+  }
+  SECTION("invalid UTF-8 in the text") {
+    // The TOML parser already refuses invalid UTF-8 in a file...
+    REQUIRE_THROWS_WITH(parse(scene_with_object("name = \"a\"\n" + glyph_line("\xC3(") + "[object.mass_spring]\n")),
+                        StartsWith("inline.toml:5:"));
+    // ... and the scene reader checks the text itself for tables built otherwise.
+    const std::string bad_sequences[] = {"\xC3(", "\xFF", "A\xE2\x82", "\x80"};
+    for (const std::string& bad : bad_sequences) {
+      toml::table root = ffd::parse_toml(scene_with_object("name = \"a\"\n" + glyph_line("A") + "[object.mass_spring]\n"),
+                                         "inline.toml");
+      toml::table* glyph = root["object"][0]["glyph"].as_table();
+      REQUIRE(glyph != nullptr);
+      glyph->insert_or_assign("text", bad);
+      REQUIRE_THROWS_AS(ffd::read_scene_table(root, "inline.toml", kFixtureDir), ffd::SceneError);
+      REQUIRE_THROWS_WITH(ffd::read_scene_table(root, "inline.toml", kFixtureDir),
+                          Catch::Matchers::EndsWith("object[0].glyph.text: is not valid UTF-8"));
+    }
+  }
+}
+
+// --- angular_velocity: the initial spin about each object's centre of mass.
+
+TEST_CASE("angular_velocity spins each object about its lattice's centre of mass", "[scene_loader]") {
+  const ffd::SceneSpec spec = parse(
+      "[simulation]\neffects = []\n"
+      "[[object]]\nname = \"spinning\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncell_size = 0.025\nmass = 2.0\n"
+      "position = [1.0, 2.0, -0.5]\nrotation_deg = [30, 40, 50]\nvelocity = [0.5, -1.0, 0.25]\n"
+      "angular_velocity = [3.0, -2.0, 5.0]\n[object.mass_spring]\n"
+      "[[object]]\nname = \"still\"\nshape = \"sphere\"\nradius = 0.05\nsubdivisions = 2\ncell_size = 0.025\n"
+      "position = [-1.0, 0.5, 0.0]\nvelocity = [0.1, 0.2, 0.3]\n[object.mass_spring]\n"
+      "[[object]]\nname = \"zero\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncell_size = 0.025\n"
+      "position = [0.0, 0.0, 3.0]\nrotation_deg = [0, 0, 20]\nvelocity = [-0.5, 0.0, 0.5]\n"
+      "angular_velocity = [0.0, 0.0, 0.0]\n[object.mass_spring]\n");
+  REQUIRE(spec.objects.size() == 3);
+  CHECK(spec.objects[0].angular_velocity == ffd::Vec3(3.0, -2.0, 5.0));
+  CHECK(spec.objects[1].angular_velocity == ffd::Vec3::Zero());  // the default
+  std::vector<std::string> log;
+  const ffd::Model model = ffd::compile(spec, log);
+  const ffd::State state = ffd::initial_state(model);
+  REQUIRE(model.objects.size() == 3);
+  REQUIRE(state.v.size() == model.node_count());
+
+  const ffd::ObjectModel& box = model.objects[0];
+  const ffd::Vec3 v0(0.5, -1.0, 0.25), w(3.0, -2.0, 5.0);
+  double mass = 0.0;
+  ffd::Vec3 centre = ffd::Vec3::Zero();
+  for (ffd::Index n = box.node_begin; n < box.node_end; ++n) {
+    mass += model.node_mass[n];
+    centre += model.node_mass[n] * state.x[n];
+  }
+  centre /= mass;
+  CHECK(mass == Approx(2.0).epsilon(1e-12));
+  CHECK((centre - ffd::Vec3(1.0, 2.0, -0.5)).norm() < 1e-12);  // a symmetric lattice: its centre is the box's
+
+  ffd::Vec3 momentum = ffd::Vec3::Zero(), angular_momentum = ffd::Vec3::Zero();
+  double largest_spin_speed = 0.0;
+  for (ffd::Index n = box.node_begin; n < box.node_end; ++n) {
+    const ffd::Vec3 r = state.x[n] - centre;
+    const ffd::Vec3 expected = v0 + w.cross(r);
+    REQUIRE(std::isfinite(state.v[n].sum()));
+    CHECK((state.v[n] - expected).norm() <= 1e-12 * expected.norm());
+    momentum += model.node_mass[n] * state.v[n];
+    angular_momentum += model.node_mass[n] * r.cross(state.v[n]);
+    largest_spin_speed = std::max(largest_spin_speed, (state.v[n] - v0).norm());
+  }
+  CHECK(largest_spin_speed > 0.1);  // |w| * half the box diagonal is about 0.5 m/s
+  // The spin adds no linear momentum...
+  CHECK((momentum - mass * v0).norm() <= 1e-12 * (mass * v0).norm());
+  // ... and for a cube-symmetric body L = I w with I a multiple of the identity: along w.
+  REQUIRE(angular_momentum.norm() > 0.0);
+  CHECK(angular_momentum.normalized().dot(w.normalized()) == Approx(1.0).epsilon(1e-9));
+  CHECK(angular_momentum.cross(w).norm() <= 1e-9 * angular_momentum.norm() * w.norm());
+
+  // Without a spin (absent or zero) every node has exactly the object's velocity.
+  for (std::size_t i : {std::size_t{1}, std::size_t{2}}) {
+    const ffd::ObjectModel& o = model.objects[i];
+    REQUIRE(o.node_end > o.node_begin);
+    for (ffd::Index n = o.node_begin; n < o.node_end; ++n) REQUIRE(state.v[n] == spec.objects[i].velocity);
+  }
+}
+
+// --- subdivide: 1-to-4 midpoint subdivision of the cleaned mesh, 0..3 times.
+
+TEST_CASE("subdivide refines the compiled surface 4x per level", "[scene_loader]") {
+  auto compiled_triangles = [](const std::string& extra) {
+    const ffd::SceneSpec spec = parse(scene_with_object(
+        "name = \"a\"\nshape = \"sphere\"\nradius = 0.1\nsubdivisions = 1\ncell_size = 0.05\n" + extra +
+        "[object.mass_spring]\n"));
+    std::vector<std::string> log;
+    const ffd::Model model = ffd::compile(spec, log);
+    REQUIRE(model.objects.size() == 1);
+    return std::make_pair(spec.objects[0].subdivisions, model.objects[0].surface.triangles.size());
+  };
+  CHECK(compiled_triangles("") == std::make_pair(0, std::size_t{80}));  // the default: none
+  CHECK(compiled_triangles("subdivide = 0\n") == std::make_pair(0, std::size_t{80}));
+  CHECK(compiled_triangles("subdivide = 1\n") == std::make_pair(1, std::size_t{320}));
+  CHECK(compiled_triangles("subdivide = 2\n") == std::make_pair(2, std::size_t{1280}));
+  CHECK(compiled_triangles("subdivide = 3\n") == std::make_pair(3, std::size_t{5120}));
+
+  SECTION("of the cleaned mesh and not the raw one") {
+    // A box with a duplicated triangle: clean-up drops it, then the 12 left become 48.
+    ffd::SceneSpec spec = parse(scene_with_object(kBoxLines));
+    spec.objects[0].mesh.triangles.push_back(spec.objects[0].mesh.triangles.front());
+    spec.objects[0].subdivisions = 1;
+    std::vector<std::string> log;
+    const ffd::Model model = ffd::compile(spec, log);
+    CHECK(model.objects[0].surface.triangles.size() == 48);
+    CHECK(model.objects[0].surface.vertices.size() == 26);
+  }
+  SECTION("compile rejects an out-of-range level in a spec built in code") {
+    ffd::SceneSpec spec = parse(scene_with_object(kBoxLines));
+    spec.objects[0].subdivisions = 4;
+    std::vector<std::string> log;
+    REQUIRE_THROWS_AS(ffd::compile(spec, log), ffd::CompileError);
+    REQUIRE_THROWS_WITH(ffd::compile(spec, log), Equals("object 'block'.subdivide: must be in 0..3"));
+  }
+}
+
+TEST_CASE("subdivide out of range names the file and line and column and field", "[scene_loader]") {
+  const auto with = [](const std::string& line) {
+    return scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\n" + line + "\n[object.mass_spring]\n");
+  };
+  require_error(with("subdivide = 4"), "inline.toml:7:13: object[0].subdivide: must be in [0, 3] (got 4)");
+  require_error(with("subdivide = -1"), "inline.toml:7:13: object[0].subdivide: must be in [0, 3] (got -1)");
+  require_error(with("subdivide = 1.0"),
+                "inline.toml:7:13: object[0].subdivide: expected an integer (got a floating-point number)");
+  require_error(with("subdivide = true"), "inline.toml:7:13: object[0].subdivide: expected an integer (got a boolean)");
+  // In a group too.
+  require_error(scene_with_group(box_group(2, "{ grid = [2, 1, 1], spacing = [1, 0, 0] }", "subdivide = 4\n")),
+                "inline.toml:12:13: group[0].subdivide: must be in [0, 3] (got 4)");
 }
