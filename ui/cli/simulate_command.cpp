@@ -16,20 +16,26 @@ namespace ffdsim {
 
 namespace {
 
-void write_obj(const std::filesystem::path& path, const ffd::SurfaceMesh& mesh) {
+// `source` is where the surface came from: a letter of a font carries the font's notice.
+void write_obj(const std::filesystem::path& path, const ffd::SurfaceMesh& mesh, const std::string& source) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  if (source.find(".ttf U+") != std::string::npos)
+    out << "# An extruded glyph of " << source << ". The font's copyright and permission notice\n"
+        << "# (Bitstream Vera licence) applies: see scenarios/meshes/DejaVu-LICENSE.txt in ffdsim.\n";
   out.precision(9);
   for (const ffd::Vec3& v : mesh.vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
   for (const auto& t : mesh.triangles) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
   if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
 
-void write_surfaces(const std::filesystem::path& dir, const ffd::Model& model, const ffd::State& state) {
+void write_surfaces(const std::filesystem::path& dir, const ffd::SceneSpec& spec, const ffd::Model& model,
+                    const ffd::State& state) {
   char step[32];
   std::snprintf(step, sizeof step, "%06llu", static_cast<unsigned long long>(state.step));
   for (ffd::Index i = 0; i < model.objects.size(); ++i)
-    write_obj(dir / (model.objects[i].name + "_" + step + ".obj"), ffd::deformed_surface(model, state, i));
+    write_obj(dir / (model.objects[i].name + "_" + step + ".obj"), ffd::deformed_surface(model, state, i),
+              spec.objects[i].source);
 }
 
 void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::StepStatistics& stats) {
@@ -82,13 +88,13 @@ int run_simulate(const SimulateOptions& o) {
     ffd::StepStatistics stats;
     stats.reserve(static_cast<std::size_t>(o.steps));
     ffd::StepReport report;
-    if (o.obj_every > 0) write_surfaces(o.out_dir, model, state);
+    if (o.obj_every > 0) write_surfaces(o.out_dir, spec, model, state);
     for (long long i = 0; i < o.steps; ++i) {
       ffd::step(model, state, scratch, report);
       stats.add(report);
       ffd::grow_scratch(model, scratch, report);
       if (o.obj_every > 0 && state.step % static_cast<std::uint64_t>(o.obj_every) == 0)
-        write_surfaces(o.out_dir, model, state);
+        write_surfaces(o.out_dir, spec, model, state);
     }
     RunSummary run;
     run.scene = spec.name;
