@@ -58,6 +58,7 @@ std::string recording_text(const Model& model, const Recording& r) {
         s << "stiffness = { object = " << quoted(model.objects[c.object].name) << ", value = " << num(c.value) << " }\n";
         break;
       case CommandKind::SetProbeStiffness: s << "probe_stiffness = " << num(c.value) << "\n"; break;
+      case CommandKind::SetAccuracy: s << "accuracy = " << static_cast<int>(c.value) << "\n"; break;
       case CommandKind::Reset: s << "reset = true\n"; break;
       case CommandKind::SetBudget: s << "budget_us = " << num(c.value) << "\n"; break;
       case CommandKind::Pause:

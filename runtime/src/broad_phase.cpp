@@ -12,7 +12,7 @@ SpatialHashBroadPhase::SpatialHashBroadPhase(double hash_cell_size, Index table_
 
 void SpatialHashBroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& boxes) {
   if (boxes.size() != model_.box_count()) {
-    model_.box_cell.assign(boxes.size(), 0);  // box_count() is all the broad phase reads
+    model_.boxes.box_cell.assign(boxes.size(), 0);  // box_count() is all the broad phase reads
     scratch_ = make_scratch(model_);
   }
   scratch_.box_nodes = boxes;
@@ -21,7 +21,7 @@ void SpatialHashBroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& bo
 bool SpatialHashBroadPhase::find_pairs(std::vector<std::pair<Index, Index>>& pairs) {
   StageCounters counters;
   StepReport report;
-  report.hash_overflow = !build_spatial_hash(model_, scratch_, counters);
+  report.hash_overflow = !build_spatial_hash(model_, model_.box_count(), 0.0, scratch_, counters);
   broad_phase_pairs(model_, scratch_, pairs);
   if (report.hash_overflow) grow_scratch(model_, scratch_, report);
   return !report.hash_overflow;

@@ -4,17 +4,34 @@
 #include <cmath>
 
 #include "ffd/box_test.h"
+#include "ffd/closest_point.h"
 #include "ffd/response.h"
 #include "ffd/trilinear.h"
 
 namespace ffd {
 
-void update_box(const Model& model, const State& state, Scratch& scratch, Index b) {
-  const std::array<Index, 8>& corner = model.cell_nodes[model.box_cell[b]];
-  const std::array<Vec3, 9>& local = model.box_local[b];
+BoxLevel box_level(const Model& model, Accuracy accuracy) {
+  switch (accuracy) {
+    case Accuracy::GridCells: return {&model.grid_boxes, 8, false, false};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 8, false, false};
+    case Accuracy::CentreOfMass: return {&model.boxes, 9, false, false};
+    case Accuracy::SampleNodes: return {&model.boxes, 9, true, false};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 9, false, false};
+    case Accuracy::Exact: return {&model.boxes, 9, false, true};
+  }
+  return {&model.boxes, 9, false, false};
+}
+
+void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b) {
+  const std::array<Index, 8>& corner = model.cell_nodes[boxes.box_cell[b]];
+  const std::array<Vec3, 9>& local = boxes.box_local[b];
   std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
   for (int k = 0; k < 9; ++k) nodes[k] = trilinear_map(local[k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
   scratch.box_valid[b] = 1;
+}
+
+void update_boxes(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch) {
+  for (Index b = 0; b < boxes.size(); ++b) update_box(model, boxes, state, scratch, b);
 }
 
 std::int64_t hash_grid_coordinate(double x, double inv_cell) {
@@ -25,16 +42,17 @@ std::int64_t hash_grid_coordinate(double x, double inv_cell) {
   return static_cast<std::int64_t>(g);
 }
 
-void invalidate_around(const Model& model, Scratch& scratch, Index cell) {
+void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell) {
   for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
-    const Index b = model.cell_box[model.cell_neighbours[i]];
-    if (b != kNoIndex) scratch.box_valid[b] = 0;
+    const Index c = model.cell_neighbours[i];
+    for (Index b = boxes.cell_box_begin[c]; b < boxes.cell_box_begin[c + 1]; ++b) scratch.box_valid[b] = 0;
   }
 }
 
-void ensure_box(const Model& model, const State& state, Scratch& scratch, Index b, StageCounters& counters) {
+void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b,
+                StageCounters& counters) {
   if (scratch.box_valid[b]) return;
-  update_box(model, state, scratch, b);
+  update_box(model, boxes, state, scratch, b);
   ++counters.boxes_updated;
 }
 
@@ -67,36 +85,116 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
   for (Index i : nodes_b) state.x[i] += move_b;
 }
 
+// Tested node k of box b at `level`: one of its 9 nodes, or (level 3) a sample node mapped
+// from the lattice as it is now.
+Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index b, int k) {
+  if (k < level.tested_nodes) return scratch.box_nodes[b][k];
+  const std::array<Index, 8>& corner = model.cell_nodes[level.boxes->box_cell[b]];
+  return trilinear_map(model.box_samples[b][k - level.tested_nodes], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+}
+
+int tested_node_count(const BoxLevel& level) { return level.tested_nodes + (level.samples ? kBoxSampleCount : 0); }
+
 // Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop).
 template <bool kFriction>
-void test_nodes(const Model& model, State& state, Scratch& scratch, Index mover, Index container, bool self,
-                StageCounters& counters, double& max_depth) {
+void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index mover, Index container,
+                bool self, StageCounters& counters, double& max_depth) {
+  const BoxSet& boxes = *level.boxes;
+  const int node_count = tested_node_count(level);
   BoxPlanes planes = box_planes(scratch.box_nodes[container]);
   if (planes.degenerate) {
-    counters.node_tests += 9;  // tested and found nothing: a degenerate box contains no node
+    counters.node_tests += node_count;  // tested and found nothing: a degenerate box contains no node
     return;
   }
-  const Index cell_a = model.box_cell[container], cell_b = model.box_cell[mover];
+  const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
   Vec3 relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
-  for (int k = 0; k < 9; ++k) {
+  for (int k = 0; k < node_count; ++k) {
     ++counters.node_tests;
-    const NodeInBox hit = node_in_box(planes, scratch.box_nodes[mover][k], relative_velocity, kRecentEntrySteps * model.settings.dt);
+    const Vec3 node = tested_node(model, level, state, scratch, mover, k);
+    const NodeInBox hit = node_in_box(planes, node, relative_velocity, kRecentEntrySteps * model.settings.dt);
     if (!hit.inside) continue;
     if (self) ++counters.self_contacts;
     else ++counters.inter_contacts;
     max_depth = std::max(max_depth, hit.depth);
-    scratch.record_contact(scratch.box_nodes[mover][k], planes.normal[hit.face], hit.depth,
-                           self ? ContactKind::Self : ContactKind::Inter);
+    scratch.record_contact(node, planes.normal[hit.face], hit.depth, self ? ContactKind::Self : ContactKind::Inter);
     respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth);
     // Update both boxes at once so the remaining tests see the corrected state.
-    invalidate_around(model, scratch, cell_a);
-    invalidate_around(model, scratch, cell_b);
-    ensure_box(model, state, scratch, container, counters);
-    ensure_box(model, state, scratch, mover, counters);
+    invalidate_around(model, boxes, scratch, cell_a);
+    invalidate_around(model, boxes, scratch, cell_b);
+    ensure_box(model, boxes, state, scratch, container, counters);
+    ensure_box(model, boxes, state, scratch, mover, counters);
     planes = box_planes(scratch.box_nodes[container]);
     if (planes.degenerate) return;
     relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
   }
+}
+
+Vec3 surface_vertex(const Model& model, const State& state, Index v) {
+  const std::array<Index, 8>& corner = model.cell_nodes[model.surface_vertex_cell[v]];
+  return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+}
+
+// Level 5, one half of a cell pair: the surface vertices of cell_b against the triangles
+// with a vertex in cell_a, as the lattice is now. The deepest vertex behind its closest
+// triangle moves the cells apart, once per pair half as a plane moves a cell: a response
+// per vertex would push the same two cells dozens of times in one step and store the
+// pushes in the springs.
+template <bool kFriction>
+void test_vertices(const Model& model, State& state, Scratch& scratch, Index cell_b, Index cell_a, bool self,
+                   StageCounters& counters, double& max_depth) {
+  const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
+  if (tri_begin == tri_end) return;
+  const double radius = model.surface_contact_radius;
+  // The triangles' corners, and their AABB widened by the radius: vertices outside it miss
+  // them all.
+  Vec3 reach_lo = Vec3::Constant(INFINITY), reach_hi = Vec3::Constant(-INFINITY);
+  Vec3* corners = scratch.triangle_corners.data();
+  for (Index t = tri_begin; t < tri_end; ++t)
+    for (Index v : model.surface_triangles[model.cell_triangles[t]]) {
+      *corners = surface_vertex(model, state, v);
+      reach_lo = reach_lo.cwiseMin(*corners);
+      reach_hi = reach_hi.cwiseMax(*corners);
+      ++corners;
+    }
+  reach_lo -= Vec3::Constant(radius);
+  reach_hi += Vec3::Constant(radius);
+  double deepest = 0.0;
+  Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
+  for (Index i = model.cell_vertex_begin[cell_b]; i < model.cell_vertex_begin[cell_b + 1]; ++i) {
+    const Vec3 p = surface_vertex(model, state, model.cell_vertices[i]);
+    if ((p.array() < reach_lo.array()).any() || (p.array() > reach_hi.array()).any()) continue;
+    double best_sq = radius * radius;
+    Vec3 best_point = Vec3::Zero(), best_normal = Vec3::Zero();
+    const Vec3* corner = scratch.triangle_corners.data();
+    for (Index t = tri_begin; t < tri_end; ++t, corner += 3) {
+      ++counters.node_tests;
+      // The distance to the triangle's AABB bounds the distance to the triangle from below.
+      const Vec3 below = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]) - p;
+      const Vec3 above = p - corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
+      if (below.cwiseMax(above).cwiseMax(0.0).squaredNorm() >= best_sq) continue;
+      const ClosestPoint q = closest_point_on_triangle(p, corner[0], corner[1], corner[2]);
+      const double d_sq = (p - q.point).squaredNorm();
+      if (!(d_sq < best_sq)) continue;
+      best_sq = d_sq;
+      best_point = q.point;
+      best_normal = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+    }
+    // Behind the closest triangle's face: inside. Near a convex edge p - q lies between the
+    // faces' normals, so an outside vertex is never taken for an inside one.
+    const double normal_length = best_normal.norm();
+    if (!(normal_length > 0.0) || !((p - best_point).dot(best_normal) < 0.0)) continue;
+    const double depth = std::sqrt(best_sq);
+    if (!(depth > deepest)) continue;
+    deepest = depth;
+    deepest_point = p;
+    deepest_normal = best_normal / normal_length;
+  }
+  if (!(deepest > 0.0)) return;
+  if (self) ++counters.self_contacts;
+  else ++counters.inter_contacts;
+  max_depth = std::max(max_depth, deepest);
+  scratch.record_contact(deepest_point, deepest_normal, deepest, self ? ContactKind::Self : ContactKind::Inter);
+  respond_pair<kFriction>(model, state, cell_a, cell_b, deepest_normal, deepest);
 }
 
 bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
@@ -134,18 +232,23 @@ void for_each_candidate_pair(const Model& model, const Scratch& scratch, WantedF
 
 }  // namespace
 
-bool build_spatial_hash(const Model& model, Scratch& scratch, StageCounters& counters) {
+bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Scratch& scratch,
+                        StageCounters& counters) {
   const double inv_cell = 1.0 / model.hash_cell_size;
   const Index table = model.hash_table_size;
   const std::size_t capacity = scratch.entries.size();
   std::size_t count = 0;
   bool fits = true;
-  for (Index b = 0; b < model.box_count() && fits; ++b) {
+  for (Index b = 0; b < box_count && fits; ++b) {
     const std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
     Vec3 lo = nodes[0], hi = nodes[0];
     for (int k = 1; k < 9; ++k) {
       lo = lo.cwiseMin(nodes[k]);
       hi = hi.cwiseMax(nodes[k]);
+    }
+    if (margin > 0.0) {
+      lo -= Vec3::Constant(margin);
+      hi += Vec3::Constant(margin);
     }
     scratch.box_min[b] = lo;
     scratch.box_max[b] = hi;
@@ -183,55 +286,91 @@ bool build_spatial_hash(const Model& model, Scratch& scratch, StageCounters& cou
   return fits;
 }
 
-template <bool kFriction>
-void collide_boxes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+namespace {
+
+// Pairs the narrow phase wants: boxes of different objects with inter-collision on; boxes of
+// one object with self-collision on whose cells share no lattice node (those touch by
+// construction).
+auto wanted_pairs(const Model& model, const BoxSet& boxes) {
   const bool inter = has(model.settings.effects, Effect::InterCollision);
   const bool self = has(model.settings.effects, Effect::SelfCollision);
-  // Self pairs skip cells that share a lattice node: they touch by construction.
-  auto wanted = [&](Index b1, Index b2) {
-    const Index c1 = model.box_cell[b1], c2 = model.box_cell[b2];
+  return [&model, &boxes, inter, self](Index b1, Index b2) {
+    const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
     if (model.cell_object[c1] != model.cell_object[c2]) return inter;
     return self && !cells_share_node(model, c1, c2);
   };
-  for_each_candidate_pair(model, scratch, wanted, [&](Index b1, Index b2) {
-    const bool same_object = model.cell_object[model.box_cell[b1]] == model.cell_object[model.box_cell[b2]];
+}
+
+}  // namespace
+
+template <bool kFriction>
+void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+                   double& max_depth) {
+  const BoxSet& boxes = *level.boxes;
+  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes), [&](Index b1, Index b2) {
+    const bool same_object = model.cell_object[boxes.box_cell[b1]] == model.cell_object[boxes.box_cell[b2]];
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
-    ensure_box(model, state, scratch, b1, counters);
-    ensure_box(model, state, scratch, b2, counters);
-    test_nodes<kFriction>(model, state, scratch, b1, b2, same_object, counters, max_depth);
-    test_nodes<kFriction>(model, state, scratch, b2, b1, same_object, counters, max_depth);
+    ensure_box(model, boxes, state, scratch, b1, counters);
+    ensure_box(model, boxes, state, scratch, b2, counters);
+    test_nodes<kFriction>(model, level, state, scratch, b1, b2, same_object, counters, max_depth);
+    test_nodes<kFriction>(model, level, state, scratch, b2, b1, same_object, counters, max_depth);
   });
 }
 
 template <bool kFriction>
-void collide_planes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+  const BoxSet& boxes = model.boxes;
+  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes), [&](Index b1, Index b2) {
+    const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
+    const bool same_object = model.cell_object[c1] == model.cell_object[c2];
+    if (same_object) ++counters.self_pairs_tested;
+    else ++counters.inter_pairs_tested;
+    test_vertices<kFriction>(model, state, scratch, c1, c2, same_object, counters, max_depth);
+    test_vertices<kFriction>(model, state, scratch, c2, c1, same_object, counters, max_depth);
+  });
+}
+
+template <bool kFriction>
+void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+                    double& max_depth) {
   const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
+  const BoxSet& boxes = *level.boxes;
+  const int node_count = tested_node_count(level);
   for (const PlaneModel& plane : model.planes) {
-    for (Index b = 0; b < model.box_count(); ++b) {
-      ensure_box(model, state, scratch, b, counters);
+    for (Index b = 0; b < boxes.size(); ++b) {
+      ensure_box(model, boxes, state, scratch, b, counters);
+      const Index cell = boxes.box_cell[b];
       double deepest = 0.0;
-      for (const Vec3& p : scratch.box_nodes[b]) deepest = std::min(deepest, plane.normal.dot(p) - plane.offset);
-      counters.node_tests += 9;
+      Vec3 deepest_point = Vec3::Zero();
+      auto consider = [&](const Vec3& p) {
+        const double height = plane.normal.dot(p) - plane.offset;
+        if (height < deepest) {
+          deepest = height;
+          deepest_point = p;
+        }
+      };
+      if (level.exact) {
+        for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i)
+          consider(surface_vertex(model, state, model.cell_vertices[i]));
+        counters.node_tests += model.cell_vertex_begin[cell + 1] - model.cell_vertex_begin[cell];
+      } else {
+        for (int k = 0; k < node_count; ++k) consider(tested_node(model, level, state, scratch, b, k));
+        counters.node_tests += node_count;
+      }
       if (!(deepest < 0.0)) continue;
       const double r = -deepest;
       ++counters.plane_contacts;
       max_depth = std::max(max_depth, r);
-      for (const Vec3& p : scratch.box_nodes[b]) {
-        if (plane.normal.dot(p) - plane.offset == deepest) {
-          scratch.record_contact(p, plane.normal, r, ContactKind::Plane);
-          break;
-        }
-      }
-      const Index cell = model.box_cell[b];
+      scratch.record_contact(deepest_point, plane.normal, r, ContactKind::Plane);
       const std::array<Index, 8>& nodes = model.cell_nodes[cell];
       if (mean_velocity(state, nodes).dot(plane.normal) < 0.0) {
         for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], Vec3::Zero(), plane.normal, alpha, beta);
       }
       const Vec3 move = r * plane.normal;  // the plane does not move: whole correction here
       for (Index i : nodes) state.x[i] += move;
-      invalidate_around(model, scratch, cell);
-      ensure_box(model, state, scratch, b, counters);
+      invalidate_around(model, boxes, scratch, cell);
+      ensure_box(model, boxes, state, scratch, b, counters);
     }
   }
 }
@@ -248,9 +387,11 @@ std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scrat
   return pairs;
 }
 
-template void collide_boxes<true>(const Model&, State&, Scratch&, StageCounters&, double&);
-template void collide_boxes<false>(const Model&, State&, Scratch&, StageCounters&, double&);
-template void collide_planes<true>(const Model&, State&, Scratch&, StageCounters&, double&);
-template void collide_planes<false>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_boxes<true>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
+template void collide_boxes<false>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
+template void collide_surfaces<true>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_surfaces<false>(const Model&, State&, Scratch&, StageCounters&, double&);
+template void collide_planes<true>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
+template void collide_planes<false>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
 
 }  // namespace ffd

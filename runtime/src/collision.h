@@ -1,23 +1,35 @@
 #pragma once
 // Collision stages: FFD AABB update (section 4), spatial-hash broad phase (6.1), node-in-box
-// narrow phase with immediate response (6.2, 7, Algorithm 1) and static planes.
+// narrow phase with immediate response (6.2, 7, Algorithm 1) and static planes, at the
+// accuracy level the State asks for (spec.h, Accuracy).
 #include "ffd/model.h"
 #include "ffd/step.h"
 
 namespace ffd {
 
-// Eq. 2 for the 9 nodes of box b from its cell's 8 lattice nodes; marks it valid.
-void update_box(const Model& model, const State& state, Scratch& scratch, Index b);
+// What an accuracy level collides: a box set, and which nodes of each box it tests.
+struct BoxLevel {
+  const BoxSet* boxes;
+  int tested_nodes;  // the first 8 (corners) or all 9 (+ centre) of each box's nodes
+  bool samples;      // also Model::box_samples (level 3)
+  bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
+};
+BoxLevel box_level(const Model& model, Accuracy accuracy);
+
+// Eq. 2 for the 9 nodes of box b of `boxes` from its cell's 8 lattice nodes; marks it valid.
+void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b);
+void update_boxes(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch);
 
 // How far back (in steps) a node's way into a box is trusted to pick the contact face
 // (box_test.h, the velocity-aware node_in_box); shared by box pairs and the probe.
 inline constexpr double kRecentEntrySteps = 2.0;
 
 // Box b recomputed if a response made it stale (counted in `counters`).
-void ensure_box(const Model& model, const State& state, Scratch& scratch, Index b, StageCounters& counters);
+void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b,
+                StageCounters& counters);
 
 // Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
-void invalidate_around(const Model& model, Scratch& scratch, Index cell);
+void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell);
 
 // Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
 Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
@@ -35,19 +47,29 @@ inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Ind
 // and maps NaN to 0, so no input is undefined behaviour.
 std::int64_t hash_grid_coordinate(double x, double inv_cell);
 
-// Fills scratch.bucket_begin / entries from the boxes' current nodes. Returns false when
-// the entry buffer was too small (the boxes that did not fit are left out of this step).
-bool build_spatial_hash(const Model& model, Scratch& scratch, StageCounters& counters);
+// Fills scratch.bucket_begin / entries from the current nodes of the first `box_count`
+// boxes, each AABB widened by `margin` (m). Returns false when the entry buffer was too
+// small (the boxes that did not fit are left out of this step).
+bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Scratch& scratch,
+                        StageCounters& counters);
 
 // Algorithm 1 over the hash table: each overlapping box pair once, nodes of each box tested
 // against the other, response applied and both boxes updated at once.
 template <bool kFriction>
-void collide_boxes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+                   double& max_depth);
 
-// Static planes: the deepest of a box's 9 nodes below a plane moves the cell out, whole
-// correction on the moving side.
+// Level 5 over the same pairs: every surface vertex of one cell against the triangles of
+// the other cell; a vertex behind the closest triangle (within Model::surface_contact_radius)
+// gets the same response, with the triangle's normal and the vertex's distance as n and r.
 template <bool kFriction>
-void collide_planes(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+
+// Static planes: the deepest of a box's tested nodes (level 5: of its cell's surface
+// vertices) below a plane moves the cell out, whole correction on the moving side.
+template <bool kFriction>
+void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+                    double& max_depth);
 
 // Candidate pairs the broad phase yields (each once), for tests and tools: (box a < box b).
 std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch);

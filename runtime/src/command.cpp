@@ -17,6 +17,7 @@ const char* command_name(CommandKind kind) {
     case CommandKind::SetGravity: return "gravity";
     case CommandKind::SetStiffness: return "stiffness";
     case CommandKind::SetProbeStiffness: return "probe_stiffness";
+    case CommandKind::SetAccuracy: return "accuracy";
     case CommandKind::Reset: return "reset";
     case CommandKind::SetBudget: return "budget";
     case CommandKind::Pause: return "pause";
@@ -48,6 +49,8 @@ bool command_is_valid(const Model& model, const Command& c) {
     }
     case CommandKind::SetProbeStiffness:
       return has(model.settings.effects, Effect::Probe) && std::isfinite(c.value) && c.value >= 0.0;
+    case CommandKind::SetAccuracy:
+      return std::isfinite(c.value) && c.value >= 0.0 && c.value < kAccuracyLevels && c.value == std::floor(c.value);
     case CommandKind::SetBudget: return std::isfinite(c.value) && c.value > 0.0;
     case CommandKind::Pause: return std::isfinite(c.value) && c.value >= 0.0;
     case CommandKind::Reset:
@@ -79,6 +82,7 @@ void apply_command(const Model& model, const State& initial, State& state, const
     case CommandKind::SetGravity: state.params.gravity = c.vector; break;
     case CommandKind::SetStiffness: state.params.stiffness[c.object] = c.value; break;
     case CommandKind::SetProbeStiffness: state.params.probe_stiffness = c.value; break;
+    case CommandKind::SetAccuracy: state.params.accuracy = static_cast<Accuracy>(static_cast<int>(c.value)); break;
     case CommandKind::Reset: {
       // Element-wise copies into vectors of the same size: no allocation.
       const std::uint64_t step = state.step;
@@ -86,6 +90,7 @@ void apply_command(const Model& model, const State& initial, State& state, const
       state.params.alpha = initial.params.alpha;
       state.params.beta = initial.params.beta;
       state.params.probe_stiffness = initial.params.probe_stiffness;
+      state.params.accuracy = initial.params.accuracy;
       std::copy(initial.params.stiffness.begin(), initial.params.stiffness.end(), state.params.stiffness.begin());
       std::copy(initial.x.begin(), initial.x.end(), state.x.begin());
       std::copy(initial.v.begin(), initial.v.end(), state.v.begin());

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "ffd/model.h"
+#include "ffd/box_test.h"
 #include "lattice.h"
 
 namespace ffd {
@@ -21,6 +22,62 @@ void require(bool ok, const std::string& where, const std::string& what) {
   if (!ok) throw CompileError(where + ": " + what);
 }
 
+// Level 3's extra nodes of a box: the centres of its 6 faces, then the midpoints of its 12
+// edges (the 4 along x, then y, then z).
+std::array<Vec3, kBoxSampleCount> box_sample_nodes(const std::array<Vec3, 9>& box) {
+  std::array<Vec3, kBoxSampleCount> samples;
+  int s = 0;
+  for (const auto& face : kBoxFaces)
+    samples[s++] = 0.25 * (box[face[0]] + box[face[1]] + box[face[2]] + box[face[3]]);
+  for (int axis = 0; axis < 3; ++axis) {
+    const int bit = 1 << axis;
+    for (int k = 0; k < 8; ++k)
+      if (!(k & bit)) samples[s++] = 0.5 * (box[k] + box[k | bit]);
+  }
+  return samples;
+}
+
+// Level 0's box: the whole lattice cell, its centre node at the cell centre.
+std::array<Vec3, 9> grid_cell_box() {
+  std::array<Vec3, 9> box;
+  for (int k = 0; k < 8; ++k) box[k] = Vec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+  box[8] = Vec3::Constant(0.5);
+  return box;
+}
+
+// Level 5's flat arrays of every object's surface, and per cell (CSR) the vertices bound to
+// it and the triangles crossing it (`lattice_triangles`: per object, per cell of the object).
+// Contacts are seen up to a quarter of the finest cell size deep.
+void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vector<Index>>>& lattice_triangles) {
+  double finest_cell = INFINITY;
+  std::vector<std::vector<Index>> cell_vertices(model.cell_count()), cell_triangles(model.cell_count());
+  for (std::size_t object = 0; object < model.objects.size(); ++object) {
+    const ObjectModel& o = model.objects[object];
+    const Index first_vertex = static_cast<Index>(model.surface_vertex_cell.size());
+    for (std::size_t v = 0; v < o.vertex_cell.size(); ++v) {
+      cell_vertices[o.vertex_cell[v]].push_back(static_cast<Index>(model.surface_vertex_cell.size()));
+      model.surface_vertex_cell.push_back(o.vertex_cell[v]);
+      model.surface_vertex_local.push_back(o.vertex_local[v]);
+    }
+    const Index first_triangle = static_cast<Index>(model.surface_triangles.size());
+    for (const auto& t : o.surface.triangles)
+      model.surface_triangles.push_back({first_vertex + t[0], first_vertex + t[1], first_vertex + t[2]});
+    for (std::size_t c = 0; c < lattice_triangles[object].size(); ++c)
+      for (Index t : lattice_triangles[object][c]) cell_triangles[o.cell_begin + c].push_back(first_triangle + t);
+    finest_cell = std::min(finest_cell, o.cell_size);
+  }
+  auto flatten = [](const std::vector<std::vector<Index>>& rows, std::vector<Index>& begin, std::vector<Index>& items) {
+    begin.push_back(0);
+    for (const auto& row : rows) {
+      items.insert(items.end(), row.begin(), row.end());
+      begin.push_back(static_cast<Index>(items.size()));
+    }
+  };
+  flatten(cell_vertices, model.cell_vertex_begin, model.cell_vertices);
+  flatten(cell_triangles, model.cell_triangle_begin, model.cell_triangles);
+  model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
+}
+
 void validate(const SceneSpec& spec) {
   const SimulationSettings& s = spec.settings;
   require(std::isfinite(s.dt) && s.dt > 0.0 && s.dt <= 0.01, "simulation.dt", "must be in (0, 0.01] s (got " + fmt(s.dt) + ")");
@@ -30,6 +87,8 @@ void validate(const SceneSpec& spec) {
   require(s.hash_table_size >= 1, "simulation.hash_table_size", "must be >= 1");
   require(std::isfinite(s.hash_cell_size) && s.hash_cell_size >= 0.0, "simulation.hash_cell_size", "must be >= 0 m");
   require(s.min_box_thickness >= 0.0 && s.min_box_thickness <= 1.0, "simulation.min_box_thickness", "must be in [0, 1]");
+  require(static_cast<int>(s.accuracy) < kAccuracyLevels, "simulation.accuracy", "must be in 0..5");
+  require(s.sub_box_split >= 2 && s.sub_box_split <= 4, "simulation.sub_box_split", "must be in 2..4");
   for (std::size_t i = 0; i < spec.objects.size(); ++i) {
     const ObjectSpec& o = spec.objects[i];
     const std::string w = "object '" + o.name + "'";
@@ -113,6 +172,7 @@ Mat3 rotation_from_degrees(const Vec3& deg) {
 Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   validate(spec);
   Model model;
+  std::vector<std::vector<std::vector<Index>>> lattice_triangles;  // per object, per cell: triangles crossing it
   model.settings = spec.settings;
   const EffectSet effects = spec.settings.effects;
   const std::vector<std::pair<int, int>> spring_pairs = cell_spring_pairs();
@@ -147,7 +207,8 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
 
     LatticeBuild lattice;
     try {
-      lattice = build_lattice(obj.surface, o.cell_size, o.fill_interior, spec.settings.min_box_thickness);
+      lattice = build_lattice(obj.surface, o.cell_size, o.fill_interior, spec.settings.min_box_thickness,
+                              spec.settings.sub_box_split);
     } catch (const std::invalid_argument& e) {
       throw CompileError("object '" + o.name + "'.cell_size: " + e.what());
     }
@@ -183,7 +244,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     // Cells, their masses (the object's mass shared equally by its cells, each cell's share
     // split over its 8 nodes) and boxes.
     obj.cell_begin = static_cast<Index>(model.cell_nodes.size());
-    obj.box_begin = static_cast<Index>(model.box_cell.size());
+    obj.box_begin = static_cast<Index>(model.boxes.size());
     const double cell_mass = o.mass / static_cast<double>(lattice.cells.size());
     for (std::size_t c = 0; c < lattice.cells.size(); ++c) {
       std::array<Index, 8> nodes;
@@ -196,19 +257,28 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
       model.cell_coord.push_back(lattice.cells[c]);
       model.cell_object.push_back(object_index);
       model.cell_inv_mass.push_back(1.0 / cell_mass);
+      model.boxes.cell_box_begin.push_back(static_cast<Index>(model.boxes.size()));
+      model.grid_boxes.cell_box_begin.push_back(static_cast<Index>(model.grid_boxes.size()));
+      model.sub_boxes.cell_box_begin.push_back(static_cast<Index>(model.sub_boxes.size()));
       if (lattice.cell_has_surface[c]) {
-        model.cell_box.push_back(static_cast<Index>(model.box_cell.size()));
-        model.box_cell.push_back(cell_index);
-        model.box_local.push_back(lattice.box_local[c]);
-      } else {
-        model.cell_box.push_back(kNoIndex);
+        const std::array<Vec3, 9>& box = lattice.box_local[c];
+        model.boxes.box_cell.push_back(cell_index);
+        model.boxes.box_local.push_back(box);
+        model.box_samples.push_back(box_sample_nodes(box));
+        model.grid_boxes.box_cell.push_back(cell_index);
+        model.grid_boxes.box_local.push_back(grid_cell_box());
+        for (const std::array<Vec3, 9>& part : lattice.sub_box_local[c]) {
+          model.sub_boxes.box_cell.push_back(cell_index);
+          model.sub_boxes.box_local.push_back(part);
+        }
       }
     }
     obj.cell_end = static_cast<Index>(model.cell_nodes.size());
-    obj.box_end = static_cast<Index>(model.box_cell.size());
+    obj.box_end = static_cast<Index>(model.boxes.size());
     obj.vertex_cell.resize(lattice.vertex_cell.size());
     for (std::size_t v = 0; v < lattice.vertex_cell.size(); ++v) obj.vertex_cell[v] = obj.cell_begin + lattice.vertex_cell[v];
     obj.vertex_local = std::move(lattice.vertex_local);
+    lattice_triangles.push_back(std::move(lattice.cell_triangles));
 
     // Springs (mass-spring objects): every corner pair of every cell, once per node pair.
     obj.spring_begin = static_cast<Index>(model.springs.size());
@@ -276,6 +346,10 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     model.objects.push_back(std::move(obj));
   }
 
+  for (BoxSet* set : {&model.boxes, &model.grid_boxes, &model.sub_boxes})
+    set->cell_box_begin.push_back(static_cast<Index>(set->size()));
+  build_exact_surfaces(model, lattice_triangles);
+
   model.node_inv_mass.resize(model.node_mass.size());
   for (std::size_t n = 0; n < model.node_mass.size(); ++n) model.node_inv_mass[n] = 1.0 / model.node_mass[n];
   model.node_region_count.assign(model.node_rest.size(), 0);
@@ -315,6 +389,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     model.pipeline.push_back(Stage::NarrowPhase);
     // Paper: 4000 buckets. Large scenes get at least two buckets per box so chains stay short.
     model.hash_table_size = static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.box_count()));
+    // The same table serves every box set (level 4 has several boxes per cell).
     double largest_cell = 0.0;
     for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
     model.hash_cell_size = spec.settings.hash_cell_size > 0.0 ? spec.settings.hash_cell_size : largest_cell;
@@ -330,6 +405,7 @@ State initial_state(const Model& model) {
   state.params.alpha = model.settings.alpha;
   state.params.beta = model.settings.beta;
   state.params.probe_stiffness = model.settings.probe.coupling_stiffness;
+  state.params.accuracy = model.settings.accuracy;
   state.params.stiffness.resize(model.objects.size());
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
     const ObjectModel& o = model.objects[i];

@@ -28,6 +28,18 @@ bool effect_from_name(const std::string& name, Effect& out) {
   return false;
 }
 
+const char* accuracy_name(Accuracy a) {
+  switch (a) {
+    case Accuracy::GridCells: return "grid cells";
+    case Accuracy::BoundaryNodes: return "FFD AABB, 8 nodes";
+    case Accuracy::CentreOfMass: return "FFD AABB + centre of mass";
+    case Accuracy::SampleNodes: return "FFD AABB + 27 nodes";
+    case Accuracy::SubBoxes: return "FFD sub-boxes";
+    case Accuracy::Exact: return "exact surfaces";
+  }
+  return "?";
+}
+
 const char* stage_name(Stage s) {
   switch (s) {
     case Stage::Gravity: return "gravity";

@@ -51,10 +51,10 @@ void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3
 
 // The probe against box b both ways: its 27 nodes in the box (node-in-box, eq. 3-7), and
 // the box's 9 nodes in the probe's sphere.
-void probe_against_box(const Model& model, State& state, Scratch& scratch, Index b, double beta,
+void probe_against_box(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, Index b, double beta,
                        StageCounters& counters, double& max_depth) {
   const double radius = model.settings.probe.radius;
-  const Index cell = model.box_cell[b];
+  const Index cell = boxes.box_cell[b];
   ProbeState& probe = state.probe;
   BoxPlanes planes = box_planes(scratch.box_nodes[b]);
   for (int k = 0; k < kProbeNodeCount && !planes.degenerate; ++k) {
@@ -67,8 +67,8 @@ void probe_against_box(const Model& model, State& state, Scratch& scratch, Index
     max_depth = std::max(max_depth, hit.depth);
     scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
     respond_cell_probe(model, state, cell, planes.normal[hit.face], hit.depth, beta);
-    invalidate_around(model, scratch, cell);
-    ensure_box(model, state, scratch, b, counters);
+    invalidate_around(model, boxes, scratch, cell);
+    ensure_box(model, boxes, state, scratch, b, counters);
     planes = box_planes(scratch.box_nodes[b]);
   }
   for (int k = 0; k < 9; ++k) {
@@ -82,14 +82,15 @@ void probe_against_box(const Model& model, State& state, Scratch& scratch, Index
     max_depth = std::max(max_depth, depth);
     scratch.record_contact(scratch.box_nodes[b][k], outward, depth, ContactKind::Probe);
     respond_cell_probe(model, state, cell, -outward, depth, beta);
-    invalidate_around(model, scratch, cell);
-    ensure_box(model, state, scratch, b, counters);
+    invalidate_around(model, boxes, scratch, cell);
+    ensure_box(model, boxes, state, scratch, b, counters);
   }
 }
 
 // Virtual coupling (Colgate et al. 1995) integrated by backward Euler, so any stiffness and
 // damping are stable at the fixed step; then contacts; then the force the device renders.
-void step_probe(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+                double& max_depth) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
   const double dt = model.settings.dt, m = settings.mass;
@@ -102,8 +103,8 @@ void step_probe(const Model& model, State& state, Scratch& scratch, StageCounter
 
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
   const Vec3 reach = Vec3::Constant(settings.radius);
-  for (Index b = 0; b < model.box_count(); ++b) {
-    ensure_box(model, state, scratch, b, counters);
+  for (Index b = 0; b < boxes.size(); ++b) {
+    ensure_box(model, boxes, state, scratch, b, counters);
     const std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
     Vec3 lo = nodes[0], hi = nodes[0];
     for (int i = 1; i < 9; ++i) {
@@ -111,7 +112,7 @@ void step_probe(const Model& model, State& state, Scratch& scratch, StageCounter
       hi = hi.cwiseMax(nodes[i]);
     }
     if (((probe.x - reach).array() > hi.array()).any() || ((probe.x + reach).array() < lo.array()).any()) continue;
-    probe_against_box(model, state, scratch, b, beta, counters, max_depth);
+    probe_against_box(model, boxes, state, scratch, b, beta, counters, max_depth);
   }
   probe.force = k * (probe.x - probe.device) + c * (probe.v - device_velocity);
 }
@@ -138,8 +139,9 @@ void step_grab(const Model& model, State& state) {
 
 }  // namespace
 
-void interact(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
-  if (has(model.settings.effects, Effect::Probe)) step_probe(model, state, scratch, counters, max_depth);
+void interact(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+              double& max_depth) {
+  if (has(model.settings.effects, Effect::Probe)) step_probe(model, boxes, state, scratch, counters, max_depth);
   if (has(model.settings.effects, Effect::Grab) && state.grab.active) step_grab(model, state);
 }
 

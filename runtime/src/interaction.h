@@ -7,7 +7,9 @@
 
 namespace ffd {
 
-void interact(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+// `boxes`: the box set of the accuracy level (the FFD AABBs at level 5).
+void interact(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+              double& max_depth);
 
 // The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
 // directions, 12 edge and 8 corner directions of a cube (27 in all).

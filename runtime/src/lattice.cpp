@@ -42,6 +42,79 @@ int clip_polygon(const std::array<Vec3, 9>& in, int n, int axis, double bound, b
   return m;
 }
 
+// Adds a clipped polygon (cell-local) to the accumulator of every part of the box
+// [box_lo, box_hi] split k x k x k that it overlaps; `parts` holds the k^3 accumulators,
+// x fastest. An axis along which the box is flat has all its surface in part 0.
+void accumulate_parts(const std::array<Vec3, 9>& poly, int n, const Vec3& tri_normal, const Vec3& box_lo,
+                      const Vec3& box_hi, int k, CellAccumulator* parts) {
+  Vec3 lo = poly[0], hi = poly[0];
+  for (int v = 1; v < n; ++v) {
+    lo = lo.cwiseMin(poly[v]);
+    hi = hi.cwiseMax(poly[v]);
+  }
+  const Vec3 part_size = (box_hi - box_lo) / k;
+  Vec3i first = Vec3i::Zero(), last = Vec3i::Zero();
+  for (int a = 0; a < 3; ++a) {
+    if (!(part_size[a] > 1e-12)) continue;
+    first[a] = std::clamp(static_cast<int>(std::floor((lo[a] - box_lo[a]) / part_size[a])), 0, k - 1);
+    last[a] = std::clamp(static_cast<int>(std::floor((hi[a] - box_lo[a]) / part_size[a])), 0, k - 1);
+  }
+  std::array<Vec3, 9> a_buf, b_buf;
+  for (int z = first.z(); z <= last.z(); ++z)
+    for (int y = first.y(); y <= last.y(); ++y)
+      for (int x = first.x(); x <= last.x(); ++x) {
+        const Vec3i part(x, y, z);
+        a_buf = poly;
+        int m = n;
+        for (int axis = 0; axis < 3 && m > 0; ++axis) {
+          if (!(part_size[axis] > 1e-12)) continue;
+          const double below = part[axis] == 0 ? -INFINITY : box_lo[axis] + part[axis] * part_size[axis];
+          const double above = part[axis] == k - 1 ? INFINITY : box_lo[axis] + (part[axis] + 1) * part_size[axis];
+          m = clip_polygon(a_buf, m, axis, below, false, b_buf);
+          m = clip_polygon(b_buf, m, axis, above, true, a_buf);
+        }
+        if (m < 3) continue;
+        double twice_area = 0.0;
+        Vec3 weighted = Vec3::Zero();
+        for (int v = 1; v + 1 < m; ++v) {
+          const double a2 = (a_buf[v] - a_buf[0]).cross(a_buf[v + 1] - a_buf[0]).norm();
+          twice_area += a2;
+          weighted += a2 * (a_buf[0] + a_buf[v] + a_buf[v + 1]) / 3.0;
+        }
+        if (!(twice_area > 1e-14)) continue;
+        CellAccumulator& acc = parts[x + k * (y + k * z)];
+        acc.has_surface = true;
+        for (int v = 0; v < m; ++v) {
+          acc.lo = acc.lo.cwiseMin(a_buf[v]);
+          acc.hi = acc.hi.cwiseMax(a_buf[v]);
+        }
+        acc.area += twice_area;
+        acc.area_centroid += weighted;
+        acc.area_normal += tri_normal.normalized() * twice_area;
+      }
+}
+
+// The box [lo, hi] of a piece of surface with mean normal `normal`, grown to at least
+// `min_thickness` per axis towards the inside of the surface (against its normal), kept
+// within [bound_lo, bound_hi]: 8 corners and the centre node (cell-local).
+std::array<Vec3, 9> fitted_box(Vec3 blo, Vec3 bhi, const Vec3& normal, const Vec3& centre, double min_thickness,
+                               double bound_lo, double bound_hi) {
+  for (int a = 0; a < 3; ++a) {
+    const double need = min_thickness - (bhi[a] - blo[a]);
+    if (need <= 0.0) continue;
+    if (normal[a] > 0.1) blo[a] -= need;
+    else if (normal[a] < -0.1) bhi[a] += need;
+    else { blo[a] -= 0.5 * need; bhi[a] += 0.5 * need; }
+    if (blo[a] < bound_lo) { bhi[a] = std::min(bound_hi, bhi[a] + (bound_lo - blo[a])); blo[a] = bound_lo; }
+    if (bhi[a] > bound_hi) { blo[a] = std::max(bound_lo, blo[a] - (bhi[a] - bound_hi)); bhi[a] = bound_hi; }
+  }
+  std::array<Vec3, 9> box;
+  for (int k = 0; k < 8; ++k)
+    box[k] = Vec3((k & 1) ? bhi.x() : blo.x(), (k & 2) ? bhi.y() : blo.y(), (k & 4) ? bhi.z() : blo.z());
+  box[8] = centre;
+  return box;
+}
+
 std::int64_t linear_index(const Vec3i& c, const Vec3i& dims) {
   return c.x() + static_cast<std::int64_t>(dims.x()) * (c.y() + static_cast<std::int64_t>(dims.y()) * c.z());
 }
@@ -62,7 +135,7 @@ int clip_triangle_to_unit_cell(const Vec3& a, const Vec3& b, const Vec3& c, std:
 }
 
 LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_interior,
-                           double min_box_thickness) {
+                           double min_box_thickness, int sub_box_split) {
   LatticeBuild out;
   const double h = cell_size;
   out.cell_size = h;
@@ -88,50 +161,55 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
 
   auto to_grid = [&](const Vec3& p) { return Vec3((p - out.origin) / h); };
 
+  // Every piece of a triangle clipped to a grid cell with area: (linear cell index, the
+  // piece in cell-local coordinates, its vertex count, the triangle's normal in grid units).
+  auto for_each_piece = [&](auto&& visit) {
+    std::array<Vec3, 9> poly;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const auto& tri = mesh.triangles[t];
+      const Vec3 g0 = to_grid(mesh.vertices[tri[0]]);
+      const Vec3 g1 = to_grid(mesh.vertices[tri[1]]);
+      const Vec3 g2 = to_grid(mesh.vertices[tri[2]]);
+      const Vec3 tri_normal = (g1 - g0).cross(g2 - g0);  // grid units, length = 2 * area
+      Vec3i cmin, cmax;
+      for (int a = 0; a < 3; ++a) {
+        const double mn = std::min({g0[a], g1[a], g2[a]}), mx = std::max({g0[a], g1[a], g2[a]});
+        cmin[a] = std::clamp(static_cast<int>(std::floor(mn)), 0, dims[a] - 1);
+        cmax[a] = std::clamp(static_cast<int>(std::floor(mx)), 0, dims[a] - 1);
+      }
+      for (int k = cmin.z(); k <= cmax.z(); ++k)
+        for (int j = cmin.y(); j <= cmax.y(); ++j)
+          for (int i = cmin.x(); i <= cmax.x(); ++i) {
+            const Vec3 base(i, j, k);
+            const int n = clip_triangle_to_unit_cell(g0 - base, g1 - base, g2 - base, poly);
+            if (n >= 3) visit(linear_index(Vec3i(i, j, k), dims), poly, n, tri_normal, static_cast<Index>(t));
+          }
+    }
+  };
+
   // Clip every triangle against the cells its bounding box touches (sections 3-4).
   std::vector<CellAccumulator> acc(grid_cells);
-  std::array<Vec3, 9> poly;
-  for (const auto& tri : mesh.triangles) {
-    const Vec3 g0 = to_grid(mesh.vertices[tri[0]]);
-    const Vec3 g1 = to_grid(mesh.vertices[tri[1]]);
-    const Vec3 g2 = to_grid(mesh.vertices[tri[2]]);
-    const Vec3 tri_normal = (g1 - g0).cross(g2 - g0);  // grid units, length = 2 * area
-    Vec3i cmin, cmax;
-    for (int a = 0; a < 3; ++a) {
-      const double mn = std::min({g0[a], g1[a], g2[a]}), mx = std::max({g0[a], g1[a], g2[a]});
-      cmin[a] = std::clamp(static_cast<int>(std::floor(mn)), 0, dims[a] - 1);
-      cmax[a] = std::clamp(static_cast<int>(std::floor(mx)), 0, dims[a] - 1);
+  std::vector<std::pair<std::int64_t, Index>> pieces;  // (grid cell, triangle) with area
+  for_each_piece([&](std::int64_t li, const std::array<Vec3, 9>& poly, int n, const Vec3& tri_normal, Index triangle) {
+    Vec3 weighted = Vec3::Zero();
+    double twice_area = 0.0;
+    for (int v = 1; v + 1 < n; ++v) {
+      const double a2 = (poly[v] - poly[0]).cross(poly[v + 1] - poly[0]).norm();
+      twice_area += a2;
+      weighted += a2 * (poly[0] + poly[v] + poly[v + 1]) / 3.0;
     }
-    for (int k = cmin.z(); k <= cmax.z(); ++k) {
-      for (int j = cmin.y(); j <= cmax.y(); ++j) {
-        for (int i = cmin.x(); i <= cmax.x(); ++i) {
-          const Vec3 base(i, j, k);
-          const int n = clip_triangle_to_unit_cell(g0 - base, g1 - base, g2 - base, poly);
-          if (n < 3) continue;
-          Vec3 twice_area_normal = Vec3::Zero();
-          Vec3 weighted = Vec3::Zero();
-          double twice_area = 0.0;
-          for (int v = 1; v + 1 < n; ++v) {
-            const Vec3 cr = (poly[v] - poly[0]).cross(poly[v + 1] - poly[0]);
-            const double a2 = cr.norm();
-            twice_area_normal += cr;
-            twice_area += a2;
-            weighted += a2 * (poly[0] + poly[v] + poly[v + 1]) / 3.0;
-          }
-          if (!(twice_area > 1e-14)) continue;  // touches the cell at an edge or a point only
-          CellAccumulator& cell = acc[linear_index(Vec3i(i, j, k), dims)];
-          cell.has_surface = true;
-          for (int v = 0; v < n; ++v) {
-            cell.lo = cell.lo.cwiseMin(poly[v]);
-            cell.hi = cell.hi.cwiseMax(poly[v]);
-          }
-          cell.area += twice_area;
-          cell.area_centroid += weighted;
-          cell.area_normal += tri_normal.normalized() * twice_area;
-        }
-      }
+    if (!(twice_area > 1e-14)) return;  // touches the cell at an edge or a point only
+    pieces.emplace_back(li, triangle);
+    CellAccumulator& cell = acc[li];
+    cell.has_surface = true;
+    for (int v = 0; v < n; ++v) {
+      cell.lo = cell.lo.cwiseMin(poly[v]);
+      cell.hi = cell.hi.cwiseMax(poly[v]);
     }
-  }
+    cell.area += twice_area;
+    cell.area_centroid += weighted;
+    cell.area_normal += tri_normal.normalized() * twice_area;
+  });
 
   // Interior cells: those the outside cannot reach through non-surface cells (6-connected
   // flood fill over the grid padded by one cell). An open mesh leaks and gets none.
@@ -182,6 +260,9 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
         out.cells.push_back(c);
         out.cell_has_surface.push_back(acc[li].has_surface);
       }
+
+  out.cell_triangles.resize(out.cells.size());
+  for (const auto& [li, triangle] : pieces) out.cell_triangles[kept_index[li]].push_back(triangle);
 
   // Bind every vertex to a surface cell whose closed box contains it (eq. 1). A vertex on a
   // cell face belongs to several cells; the first surface one in (-1, 0) offset order wins.
@@ -237,23 +318,39 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
   for (std::size_t c = 0; c < out.cells.size(); ++c) {
     if (!out.cell_has_surface[c]) continue;
     const CellAccumulator& cell = acc[linear_index(out.cells[c], dims)];
-    Vec3 blo = cell.lo.cwiseMax(0.0), bhi = cell.hi.cwiseMin(1.0);
+    const Vec3 blo = cell.lo.cwiseMax(0.0), bhi = cell.hi.cwiseMin(1.0);
     const Vec3 normal = cell.area_normal.norm() > 0.0 ? Vec3(cell.area_normal.normalized()) : Vec3::Zero();
-    for (int a = 0; a < 3; ++a) {
-      const double need = min_box_thickness - (bhi[a] - blo[a]);
-      if (need <= 0.0) continue;
-      // Grow towards the inside of the surface (against its normal), within the cell.
-      if (normal[a] > 0.1) blo[a] -= need;
-      else if (normal[a] < -0.1) bhi[a] += need;
-      else { blo[a] -= 0.5 * need; bhi[a] += 0.5 * need; }
-      if (blo[a] < 0.0) { bhi[a] = std::min(1.0, bhi[a] - blo[a]); blo[a] = 0.0; }
-      if (bhi[a] > 1.0) { blo[a] = std::max(0.0, blo[a] - (bhi[a] - 1.0)); bhi[a] = 1.0; }
+    const Vec3 centre = cell.area > 0.0 ? Vec3(cell.area_centroid / cell.area) : Vec3(0.5 * (blo + bhi));
+    out.box_local[c] = fitted_box(blo, bhi, normal, centre, min_box_thickness, 0.0, 1.0);
+  }
+
+  // Accuracy level 4: every FFD AABB (its tight bounds, before thickening) split k x k x k;
+  // each part the surface passes through gets its own box fitted to the surface in it.
+  out.sub_box_local.resize(out.cells.size());
+  if (sub_box_split > 0) {
+    const int k = sub_box_split, parts_per_box = k * k * k;
+    std::vector<std::int64_t> first_part(grid_cells, -1);
+    for (std::size_t c = 0; c < out.cells.size(); ++c)
+      if (out.cell_has_surface[c]) first_part[linear_index(out.cells[c], dims)] = static_cast<std::int64_t>(c) * parts_per_box;
+    std::vector<CellAccumulator> parts(out.cells.size() * parts_per_box);
+    for_each_piece([&](std::int64_t li, const std::array<Vec3, 9>& poly, int n, const Vec3& tri_normal, Index) {
+      if (first_part[li] < 0) return;
+      const CellAccumulator& cell = acc[li];
+      accumulate_parts(poly, n, tri_normal, cell.lo.cwiseMax(0.0), cell.hi.cwiseMin(1.0), k, &parts[first_part[li]]);
+    });
+    for (std::size_t c = 0; c < out.cells.size(); ++c) {
+      if (!out.cell_has_surface[c]) continue;
+      for (int p = 0; p < parts_per_box; ++p) {
+        const CellAccumulator& part = parts[c * parts_per_box + p];
+        if (!part.has_surface) continue;
+        const Vec3 normal = part.area_normal.norm() > 0.0 ? Vec3(part.area_normal.normalized()) : Vec3::Zero();
+        out.sub_box_local[c].push_back(fitted_box(part.lo.cwiseMax(0.0), part.hi.cwiseMin(1.0), normal,
+                                                  Vec3(part.area_centroid / part.area), min_box_thickness / k, 0.0, 1.0));
+      }
+      // A cell whose surface is only vertices touching it has no part with area: its
+      // whole FFD AABB stands in.
+      if (out.sub_box_local[c].empty()) out.sub_box_local[c].push_back(out.box_local[c]);
     }
-    for (int k = 0; k < 8; ++k) {
-      out.box_local[c][k] = Vec3((k & 1) ? bhi.x() : blo.x(), (k & 2) ? bhi.y() : blo.y(),
-                                 (k & 4) ? bhi.z() : blo.z());
-    }
-    out.box_local[c][8] = cell.area > 0.0 ? Vec3(cell.area_centroid / cell.area) : Vec3(0.5 * (blo + bhi));
   }
   return out;
 }

@@ -21,6 +21,10 @@ struct LatticeBuild {
   // 8 corners (corner k = (k & 1, k >> 1 & 1, k >> 2 & 1) of [lo, hi]) and the area-weighted
   // centre of mass of the surface in the cell, all in cell-local coordinates.
   std::vector<std::array<Vec3, 9>> box_local;
+  // Accuracy level 4: the surface cell split into k x k x k parts, one box per part the
+  // surface passes through, fitted to the surface in it (same layout as box_local).
+  std::vector<std::vector<std::array<Vec3, 9>>> sub_box_local;
+  std::vector<std::vector<Index>> cell_triangles;  // per kept cell: triangles crossing it with area
   std::vector<Index> vertex_cell;   // index into `cells`
   std::vector<Vec3> vertex_local;   // (s, t, u) of eq. 1, divided by h
 };
@@ -29,8 +33,9 @@ struct LatticeBuild {
 // piece of surface gives a flat box) is thickened towards the inside of the surface, so
 // the surface stays on the box's outer face and the box keeps a volume to detect nodes in.
 // Throws CompileError-like std::invalid_argument when the grid would be unreasonably large.
+// `sub_box_split` is k of accuracy level 4 (0: no sub-boxes).
 LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_interior,
-                           double min_box_thickness);
+                           double min_box_thickness, int sub_box_split);
 
 // Clips a triangle to the unit cell [0,1]^3 given in that cell's local coordinates
 // (Sutherland-Hodgman); returns the number of polygon vertices written to `out` (0 when

@@ -52,6 +52,7 @@ SurfaceContactReport measure_surface_contacts(const Model& model, const State& s
   auto add = [&](SurfaceContact c) {
     report.max_penetration_m = std::max(report.max_penetration_m, c.penetration_m);
     report.max_gap_m = std::max(report.max_gap_m, c.gap_m);
+    report.penetrating_vertices += c.penetrating_vertices;
     report.contacts.push_back(std::move(c));
   };
   const bool objects_collide = has(model.settings.effects, Effect::InterCollision);
@@ -62,16 +63,21 @@ SurfaceContactReport measure_surface_contacts(const Model& model, const State& s
       if ((lo.array() > hi.array()).any()) continue;
       const PairContactMetrics m = measure_pair(surfaces[i], surfaces[j], search_radius);
       if (!m.near) continue;
-      add({model.objects[i].name, model.objects[j].name, m.penetration_m, m.gap_m});
+      add({model.objects[i].name, model.objects[j].name, m.penetration_m, m.gap_m, m.penetrating_vertices});
     }
   }
   if (has(model.settings.effects, Effect::Planes)) {
     for (const PlaneModel& plane : model.planes) {
       for (std::size_t i = 0; i < surfaces.size(); ++i) {
         double lowest = INFINITY;
-        for (const Vec3& p : surfaces[i].vertices) lowest = std::min(lowest, plane.normal.dot(p) - plane.offset);
+        std::size_t below = 0;
+        for (const Vec3& p : surfaces[i].vertices) {
+          const double height = plane.normal.dot(p) - plane.offset;
+          lowest = std::min(lowest, height);
+          below += height < 0.0;
+        }
         if (!(lowest < search_radius)) continue;
-        add({model.objects[i].name, plane.name, std::max(0.0, -lowest), std::max(0.0, lowest)});
+        add({model.objects[i].name, plane.name, std::max(0.0, -lowest), std::max(0.0, lowest), below});
       }
     }
   }

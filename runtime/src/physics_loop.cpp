@@ -15,6 +15,7 @@
 
 #include "collision.h"
 #include "ffd/measure.h"
+#include "ffd/trilinear.h"
 
 namespace ffd {
 
@@ -180,10 +181,19 @@ void PhysicsLoop::Impl::publish_frame() {
   Frame& f = frames.back();
   f.step = state.step;
   std::copy(state.x.begin(), state.x.end(), f.nodes.begin());
-  // Boxes a response left stale are refreshed so the frame shows the step's final lattice.
-  for (Index b = 0; b < model.box_count(); ++b)
-    if (!scratch.box_valid[b]) update_box(model, state, scratch, b);
-  std::copy(scratch.box_nodes.begin(), scratch.box_nodes.end(), f.boxes.begin());
+  // Frames show the FFD AABBs whatever the accuracy level. Boxes a response left stale are
+  // refreshed so the frame shows the step's final lattice.
+  if (box_level(model, state.params.accuracy).boxes == &model.boxes) {
+    for (Index b = 0; b < model.box_count(); ++b)
+      if (!scratch.box_valid[b]) update_box(model, model.boxes, state, scratch, b);
+    std::copy(scratch.box_nodes.begin(), scratch.box_nodes.begin() + model.box_count(), f.boxes.begin());
+  } else {
+    for (Index b = 0; b < model.box_count(); ++b) {
+      const std::array<Index, 8>& corner = model.cell_nodes[model.boxes.box_cell[b]];
+      for (int k = 0; k < 9; ++k)
+        f.boxes[b][k] = trilinear_map(model.boxes.box_local[b][k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+    }
+  }
   f.contact_count = scratch.contact_count;
   std::copy(scratch.contacts.begin(), scratch.contacts.begin() + scratch.contact_count, f.contacts.begin());
   f.probe = state.probe;
@@ -191,6 +201,7 @@ void PhysicsLoop::Impl::publish_frame() {
   f.alpha = state.params.alpha;
   f.beta = state.params.beta;
   f.gravity = state.params.gravity;
+  f.accuracy = state.params.accuracy;
   f.report = report;
   f.paused = paused;
   frames.publish();

@@ -14,6 +14,10 @@ namespace ffd {
 
 namespace {
 
+std::size_t largest_box_set(const Model& model) {
+  return std::max({model.boxes.size(), model.grid_boxes.size(), model.sub_boxes.size()});
+}
+
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
@@ -34,14 +38,16 @@ bool all_finite(const State& state) {
 
 Scratch make_scratch(const Model& model) {
   Scratch s;
-  s.box_nodes.resize(model.box_count());
-  s.box_valid.assign(model.box_count(), 0);
-  s.box_min.resize(model.box_count());
-  s.box_max.resize(model.box_count());
+  // Room for the largest box set of any accuracy level (level 4 has several boxes a cell).
+  const std::size_t boxes = largest_box_set(model);
+  s.box_nodes.resize(boxes);
+  s.box_valid.assign(boxes, 0);
+  s.box_min.resize(boxes);
+  s.box_max.resize(boxes);
   if (model.hash_table_size > 0) {
     s.bucket_begin.assign(model.hash_table_size + 1, 0);
     // A box no larger than a hash cell touches at most 8 of them.
-    const std::size_t capacity = 8 * model.box_count() + 64;
+    const std::size_t capacity = 8 * boxes + 64;
     s.entries.resize(capacity);
     s.entries_unsorted.resize(capacity);
     s.entry_bucket.resize(capacity);
@@ -52,6 +58,10 @@ Scratch make_scratch(const Model& model) {
   s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
   s.contacts.resize(kContactCapacity);
+  std::size_t most_triangles = 0;
+  for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
+    most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);
+  s.triangle_corners.resize(3 * most_triangles);
   return s;
 }
 
@@ -59,7 +69,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
   if (!last.hash_overflow || model.hash_table_size == 0) return;
   // Boxes stretched over hundreds of hash cells mean a blown-up scene, not a large one:
   // stop growing there and keep reporting the overflow.
-  const std::size_t limit = 512 * (8 * model.box_count() + 64);
+  const std::size_t limit = 512 * (8 * largest_box_set(model) + 64);
   if (scratch.entries.size() >= limit) return;
   const std::size_t capacity = std::min(limit, 2 * scratch.entries.size());
   scratch.entries.resize(capacity);
@@ -68,7 +78,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
 }
 
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch) {
-  for (Index b = 0; b < model.box_count(); ++b) update_box(model, state, scratch, b);
+  update_boxes(model, *box_level(model, state.params.accuracy).boxes, state, scratch);
 }
 
 void step(const Model& model, State& state, Scratch& scratch, StepReport& report) {
@@ -77,6 +87,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   report.stage_ns.fill(-1);
   const std::int64_t start = now_ns();
   const bool friction = has(model.settings.effects, Effect::Friction);
+  const BoxLevel level = box_level(model, state.params.accuracy);
   scratch.contact_count = 0;
   scratch.contacts_dropped = 0;
   for (Stage stage : model.pipeline) {
@@ -86,19 +97,33 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::Gravity: apply_gravity(model, state); break;
       case Stage::Dynamics: integrate_dynamics(model, state, scratch); break;
       case Stage::BoxUpdate:
-        update_all_boxes(model, state, scratch);
-        counters.boxes_updated = static_cast<std::uint32_t>(model.box_count());
+        update_boxes(model, *level.boxes, state, scratch);
+        counters.boxes_updated = static_cast<std::uint32_t>(level.boxes->size());
         break;
-      case Stage::BroadPhase: report.hash_overflow = !build_spatial_hash(model, scratch, counters); break;
-      case Stage::NarrowPhase:
-        if (friction) collide_boxes<true>(model, state, scratch, counters, report.max_box_penetration_m);
-        else collide_boxes<false>(model, state, scratch, counters, report.max_box_penetration_m);
+      case Stage::BroadPhase: {
+        // The exact level pairs cells whose boxes come within its contact radius.
+        const double margin = level.exact ? model.surface_contact_radius : 0.0;
+        report.hash_overflow = !build_spatial_hash(model, level.boxes->size(), margin, scratch, counters);
         break;
+      }
+      case Stage::NarrowPhase: {
+        double& depth = report.max_box_penetration_m;
+        if (level.exact) {
+          if (friction) collide_surfaces<true>(model, state, scratch, counters, depth);
+          else collide_surfaces<false>(model, state, scratch, counters, depth);
+        } else {
+          if (friction) collide_boxes<true>(model, level, state, scratch, counters, depth);
+          else collide_boxes<false>(model, level, state, scratch, counters, depth);
+        }
+        break;
+      }
       case Stage::Planes:
-        if (friction) collide_planes<true>(model, state, scratch, counters, report.max_box_penetration_m);
-        else collide_planes<false>(model, state, scratch, counters, report.max_box_penetration_m);
+        if (friction) collide_planes<true>(model, level, state, scratch, counters, report.max_box_penetration_m);
+        else collide_planes<false>(model, level, state, scratch, counters, report.max_box_penetration_m);
         break;
-      case Stage::Interaction: interact(model, state, scratch, counters, report.max_box_penetration_m); break;
+      case Stage::Interaction:
+        interact(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
+        break;
       case Stage::Count: break;
     }
     report.stage_ns[static_cast<std::size_t>(stage)] = now_ns() - t0;

@@ -35,7 +35,7 @@ const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_st
 const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
-    "effects", "hash_table_size", "hash_cell_size", "min_box_thickness"};
+    "effects", "hash_table_size", "hash_cell_size", "min_box_thickness", "accuracy", "sub_box_split"};
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
     "name",         "mesh",          "shape",          "glyph",          "size",
@@ -113,6 +113,9 @@ class SceneReader {
         static_cast<int>(sim.integer("hash_table_size", settings.hash_table_size, 1, 10'000'000));
     settings.hash_cell_size = sim.number("hash_cell_size", settings.hash_cell_size, kNonNegative);
     settings.min_box_thickness = sim.number("min_box_thickness", settings.min_box_thickness, kUnitInterval);
+    settings.accuracy = static_cast<Accuracy>(
+        sim.integer("accuracy", static_cast<int>(settings.accuracy), 0, kAccuracyLevels - 1));
+    settings.sub_box_split = static_cast<int>(sim.integer("sub_box_split", settings.sub_box_split, 2, 4));
     settings.effects = read_effects(sim);
     return settings;
   }

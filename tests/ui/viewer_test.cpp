@@ -179,11 +179,11 @@ TEST_CASE("Viewer: a picked surface point maps back to its cell and local coordi
   frame.boxes.resize(model.box_count());
   for (Index b = 0; b < model.box_count(); ++b)
     for (int i = 0; i < 9; ++i) {
-      const auto& corners = model.cell_nodes[model.box_cell[b]];
+      const auto& corners = model.cell_nodes[model.boxes.box_cell[b]];
       frame.boxes[b][static_cast<std::size_t>(i)] =
-          trilinear_map(model.box_local[b][static_cast<std::size_t>(i)], [&](int j) -> const Vec3& { return frame.nodes[corners[j]]; });
+          trilinear_map(model.boxes.box_local[b][static_cast<std::size_t>(i)], [&](int j) -> const Vec3& { return frame.nodes[corners[j]]; });
     }
-  const Index cell = model.box_cell[3];
+  const Index cell = model.boxes.box_cell[3];
   const Vec3 local(0.25, 0.6, 0.9);
   const Vec3 point = trilinear_map(local, [&](int j) -> const Vec3& { return frame.nodes[model.cell_nodes[cell][j]]; });
   const CellPoint found = cell_at(model, frame, point);

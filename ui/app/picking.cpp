@@ -37,9 +37,9 @@ CellPoint cell_at(const Model& model, const Frame& frame, const Vec3& point) {
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
-    const double margin = 0.25 * model.objects[model.cell_object[model.box_cell[b]]].cell_size;
+    const double margin = 0.25 * model.objects[model.cell_object[model.boxes.box_cell[b]]].cell_size;
     if (((point.array() < lo.array() - margin) || (point.array() > hi.array() + margin)).any()) continue;
-    const Index cell = model.box_cell[b];
+    const Index cell = model.boxes.box_cell[b];
     std::array<Vec3, 8> corners;
     for (int j = 0; j < 8; ++j) corners[static_cast<std::size_t>(j)] = frame.nodes[model.cell_nodes[cell][static_cast<std::size_t>(j)]];
     const Vec3 stu = inverse_trilinear(corners, point);

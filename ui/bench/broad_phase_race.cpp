@@ -148,7 +148,7 @@ BoxSet record_boxes(const ffd::Model& model, const ffd::Scratch& scratch, std::s
   set.step = step;
   set.hash_cell_size = model.hash_cell_size;
   set.hash_table_size = model.hash_table_size;
-  set.boxes = scratch.box_nodes;
+  set.boxes.assign(scratch.box_nodes.begin(), scratch.box_nodes.begin() + model.box_count());
   return set;
 }
 

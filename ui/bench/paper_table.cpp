@@ -33,7 +33,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Nearest-rank percentile of a copy.
+std::string thousands(double value) {
+  const long long v = std::llround(value);
+  std::string digits = std::to_string(v < 0 ? -v : v);
+  for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3) digits.insert(static_cast<std::size_t>(i), ",");
+  return (v < 0 ? "-" : "") + digits;
+}
+
+}  // namespace
+
 double percentile(std::vector<double> values, double p) {
   if (values.empty()) return 0.0;
   const std::size_t rank = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size())));
@@ -52,20 +60,11 @@ std::int64_t stage(const ffd::StepReport& r, ffd::Stage s) {
   return std::max<std::int64_t>(0, r.stage_ns[static_cast<std::size_t>(s)]);
 }
 
-std::string thousands(double value) {
-  const long long v = std::llround(value);
-  std::string digits = std::to_string(v < 0 ? -v : v);
-  for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3) digits.insert(static_cast<std::size_t>(i), ",");
-  return (v < 0 ? "-" : "") + digits;
-}
-
 std::string fixed(double value, int decimals) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
   return buffer;
 }
-
-}  // namespace
 
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick,
                               const Progress& progress) {

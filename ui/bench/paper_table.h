@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bench/broad_phase_race.h"
+#include "ffd/step.h"
 
 namespace ffdbench {
 
@@ -56,6 +57,12 @@ using Progress = std::function<void(const std::string& what, std::uint64_t done,
 // run and at its end. Throws on a bad scene file (the message names it).
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick,
                               const Progress& progress);
+
+// Figures shared by the bench tables.
+double percentile(std::vector<double> values, double p);  // nearest rank, of a copy
+double mean(const std::vector<double>& values);
+std::int64_t stage(const ffd::StepReport& report, ffd::Stage s);  // ns, 0 for a stage not run
+std::string fixed(double value, int decimals);
 
 // "Intel(R) Xeon(R) ... (2 cores)" from /proc/cpuinfo, or "unknown CPU".
 std::string cpu_description();

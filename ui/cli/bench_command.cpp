@@ -1,10 +1,7 @@
 // `ffdsim bench`: the paper's Table 1 beside ours, and the broad-phase race against FCL on
 // FFD AABBs recorded from the same runs. Progress bars on the terminal while it runs.
-#include <unistd.h>
-
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -13,66 +10,9 @@
 #include "bench/broad_phase_race.h"
 #include "bench/paper_table.h"
 #include "commands.h"
+#include "output_files.h"
 
 namespace ffdsim {
-
-namespace {
-
-// One line redrawn in place on a terminal; elsewhere (a CI log) a line per phase.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool quiet) : quiet_(quiet), terminal_(isatty(STDERR_FILENO) == 1) {}
-  void operator()(const std::string& what, std::uint64_t done, std::uint64_t total) {
-    if (quiet_) return;
-    if (!terminal_) {
-      if (what != last_) std::fprintf(stderr, "ffdsim bench: %s (%llu steps)\n", what.c_str(), static_cast<unsigned long long>(total));
-      last_ = what;
-      return;
-    }
-    constexpr int kWidth = 30;
-    const double fraction = total ? static_cast<double>(done) / static_cast<double>(total) : 1.0;
-    const int filled = static_cast<int>(fraction * kWidth);
-    std::string bar(static_cast<std::size_t>(filled), '#');
-    bar.resize(kWidth, '.');
-    std::fprintf(stderr, "\r\033[K%-28s [%s] %3d%%  %llu/%llu", what.c_str(), bar.c_str(), static_cast<int>(fraction * 100.0),
-                 static_cast<unsigned long long>(done), static_cast<unsigned long long>(total));
-    std::fflush(stderr);
-    last_ = what;
-  }
-  void finish_line(const std::string& text) {
-    if (quiet_) return;
-    std::fprintf(stderr, terminal_ ? "\r\033[K%s\n" : "%s\n", text.c_str());
-  }
-
- private:
-  bool quiet_, terminal_;
-  std::string last_;
-};
-
-void write_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
-}
-
-// Replaces the text between "<!-- bench:NAME:begin -->" and "<!-- bench:NAME:end -->".
-std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
-                            const std::string& body) {
-  const std::string begin = "<!-- bench:" + name + ":begin -->", end = "<!-- bench:" + name + ":end -->";
-  const std::size_t b = text.find(begin), e = text.find(end);
-  if (b == std::string::npos || e == std::string::npos || e < b)
-    throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
-  return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
-}
-
-std::string today() {
-  const std::time_t now = std::time(nullptr);
-  char buffer[32];
-  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
-  return buffer;
-}
-
-}  // namespace
 
 void register_bench(CLI::App& app, BenchOptions& o) {
   CLI::App* cmd = app.add_subcommand(
@@ -102,17 +42,13 @@ int run_bench(const BenchOptions& o) {
     }
     std::string readme_text;
     if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of benchmarking
-      std::ifstream in(o.readme);
-      if (!in) throw std::runtime_error(o.readme + ": cannot read");
-      std::ostringstream s;
-      s << in.rdbuf();
-      readme_text = s.str();
-      replace_section(replace_section(readme_text, o.readme, "table", ""), o.readme, "race", "");
+      readme_text = read_file(o.readme);
+      replace_section(replace_section(readme_text, o.readme, "bench:table", ""), o.readme, "bench:race", "");
     }
     ensure_folder(o.out_dir);
 
     const std::string cpu = ffdbench::cpu_description();
-    ProgressBar progress(o.quiet);
+    ProgressBar progress("ffdsim bench", o.quiet);
     std::vector<ffdbench::ScenarioResult> results;
     bool finite = true;
     for (const ffdbench::Scenario& scenario : chosen) {
@@ -152,8 +88,8 @@ int run_bench(const BenchOptions& o) {
     write_file(std::filesystem::path(o.out_dir) / "bench.json", json.dump(2) + "\n");
     std::printf("%s\n%s", table.c_str(), race_table.c_str());
     if (!o.readme.empty()) {
-      write_file(o.readme, replace_section(replace_section(readme_text, o.readme, "table", table), o.readme, "race",
-                                           race_table));
+      write_file(o.readme, replace_section(replace_section(readme_text, o.readme, "bench:table", table), o.readme,
+                                           "bench:race", race_table));
       std::fprintf(stderr, "ffdsim bench: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim bench: wrote %s/table.md and %s/bench.json\n", o.out_dir.c_str(), o.out_dir.c_str());

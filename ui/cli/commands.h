@@ -70,4 +70,16 @@ struct BenchOptions {
 void register_bench(CLI::App& app, BenchOptions& options);
 int run_bench(const BenchOptions& options);
 
+struct AccuracyOptions {
+  std::vector<std::string> scenes;  // empty: the two teapots and the five soft bunnies
+  std::uint64_t steps = 1500;
+  std::vector<int> levels;          // empty: all
+  std::string out_dir = "out/accuracy";
+  std::string readme;               // Markdown file whose accuracy section is replaced
+  std::string plot;                 // where the PNG is also copied
+  bool quiet = false;
+};
+void register_accuracy(CLI::App& app, AccuracyOptions& options);
+int run_accuracy_command(const AccuracyOptions& options);
+
 }  // namespace ffdsim

@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   ffdsim::register_run(app, run);
   ffdsim::BenchOptions bench;
   ffdsim::register_bench(app, bench);
+  ffdsim::AccuracyOptions accuracy;
+  ffdsim::register_accuracy(app, accuracy);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -40,5 +42,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("replay")) return ffdsim::run_replay_command(replay);
   if (app.got_subcommand("run")) return ffdsim::run_run(run);
   if (app.got_subcommand("bench")) return ffdsim::run_bench(bench);
+  if (app.got_subcommand("accuracy")) return ffdsim::run_accuracy_command(accuracy);
   return ffdsim::kExitUsage;
 }

@@ -20,6 +20,7 @@ enum class CommandKind : std::uint8_t {
   SetGravity,    // vector: m/s^2
   SetStiffness,  // object + value: N/m (mass_spring) or pull fraction in (0, 1] (shape_matching)
   SetProbeStiffness,  // value: virtual coupling stiffness of the probe, N/m (>= 0)
+  SetAccuracy,   // value: collision accuracy level 0..5 (spec.h, Accuracy)
   Reset,         // back to the scene's initial State (the step index keeps counting)
   // Loop commands: they steer the physics loop and leave the State alone.
   SetBudget,     // value: latency budget, microseconds (> 0)

@@ -26,11 +26,13 @@ struct SurfaceContact {
   std::string a, b;  // object names; b may be a plane's name
   double penetration_m = 0.0;
   double gap_m = 0.0;
+  std::size_t penetrating_vertices = 0;  // of either surface behind the other (below the plane)
 };
 struct SurfaceContactReport {
   std::vector<SurfaceContact> contacts;
   double max_penetration_m = 0.0;
   double max_gap_m = 0.0;
+  std::size_t penetrating_vertices = 0;  // summed over the contacts
 };
 SurfaceContactReport measure_surface_contacts(const Model& model, const State& state, double search_radius = 0.0);
 

@@ -41,7 +41,7 @@ struct ObjectModel {
   Vec3i lattice_dims;             // cells per axis of the full regular grid
   Index node_begin = 0, node_end = 0;      // range in Model::node_*
   Index cell_begin = 0, cell_end = 0;      // range in Model::cell_*
-  Index box_begin = 0, box_end = 0;        // range in Model::box_*
+  Index box_begin = 0, box_end = 0;        // range in Model::boxes
   Index spring_begin = 0, spring_end = 0;  // range in Model::springs
   Index region_begin = 0, region_end = 0;  // range in Model::regions
   // The embedded surface: rest positions, and for every vertex its cell and local
@@ -62,6 +62,20 @@ struct Region {
   Vec3 rest_centroid;              // m, mass-weighted
   double mass;                     // kg
 };
+
+// One set of collision boxes over the lattice cells, each given by 8 corners and a centre
+// node in its cell's local coordinates (s, t, u), moved by trilinear FFD (eq. 2). Boxes are
+// stored in cell order, so the boxes of cell c are [cell_box_begin[c], cell_box_begin[c + 1]).
+struct BoxSet {
+  std::vector<Index> box_cell;                  // lattice cell of each box
+  std::vector<std::array<Vec3, 9>> box_local;   // corner k = (k & 1, k >> 1 & 1, k >> 2 & 1), then the centre
+  std::vector<Index> cell_box_begin;            // (C + 1)
+  std::size_t size() const { return box_cell.size(); }
+};
+
+// Extra sample nodes per FFD AABB at accuracy level 3: its 6 face centres and 12 edge
+// midpoints, in cell-local coordinates.
+inline constexpr int kBoxSampleCount = 18;
 
 struct PlaneModel {
   std::string name;
@@ -86,7 +100,6 @@ struct Model {
   std::vector<Vec3i> cell_coord;      // integer lattice coordinates within the object
   std::vector<Index> cell_object;
   std::vector<double> cell_inv_mass;  // 1/kg, inverse of the summed mass share of the cell
-  std::vector<Index> cell_box;        // box of the cell, kNoIndex for interior cells
   // Cells that share a lattice node with cell c (c included): rows of a CSR table. When a
   // response moves c's nodes these cells' boxes are stale.
   std::vector<Index> cell_neighbour_begin;  // (C + 1)
@@ -94,9 +107,26 @@ struct Model {
 
   // FFD AABBs (B): one per surface cell. 8 boundary nodes at the corners of the bounding
   // box of the surface inside the cell + the surface's centre of mass, all in the cell's
-  // local coordinates (section 4).
-  std::vector<Index> box_cell;
-  std::vector<std::array<Vec3, 9>> box_local;
+  // local coordinates (section 4). Accuracy levels 1, 2, 3 collide these; level 5 keeps
+  // them for the probe and the frames.
+  BoxSet boxes;
+  std::vector<std::array<Vec3, kBoxSampleCount>> box_samples;  // level 3's extra nodes per box
+  // Accuracy level 0: the plain lattice cells of the surface as boxes (corners at 0 and 1,
+  // centre node at the cell centre). Level 4: every FFD AABB split into k x k x k parts, each
+  // fitted to the surface inside it.
+  BoxSet grid_boxes;
+  BoxSet sub_boxes;
+
+  // Accuracy level 5, the exact surfaces: every object's surface vertices (bound to a cell
+  // by eq. 1) and triangles in flat arrays with global vertex indices, and per cell (CSR)
+  // the vertices bound to it and the triangles with a vertex bound to it. Pairs of cells
+  // come from the box broad phase, widened by the contact radius.
+  std::vector<Index> surface_vertex_cell;
+  std::vector<Vec3> surface_vertex_local;
+  std::vector<std::array<Index, 3>> surface_triangles;
+  std::vector<Index> cell_vertex_begin, cell_vertices;    // (C + 1), vertex indices
+  std::vector<Index> cell_triangle_begin, cell_triangles;  // (C + 1), triangle indices
+  double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
 
   std::vector<Spring> springs;
   std::vector<Region> regions;
@@ -111,7 +141,7 @@ struct Model {
 
   std::size_t node_count() const { return node_rest.size(); }
   std::size_t cell_count() const { return cell_nodes.size(); }
-  std::size_t box_count() const { return box_cell.size(); }
+  std::size_t box_count() const { return boxes.size(); }  // FFD AABBs
 };
 
 struct CompileError : std::runtime_error {

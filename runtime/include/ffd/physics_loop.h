@@ -84,6 +84,7 @@ struct Frame {
   GrabState grab;
   double alpha = 0.0, beta = 0.0;
   Vec3 gravity = Vec3::Zero();
+  Accuracy accuracy = Accuracy::CentreOfMass;
   StepReport report;
   bool paused = false;
 };

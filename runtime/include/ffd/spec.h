@@ -96,6 +96,19 @@ struct GrabSettings {
   double damping = 2.0;      // N*s/m, on the point's velocity
 };
 
+// Collision accuracy levels: what stands for a surface in contact, from the coarsest to the
+// exact surfaces. Each level's cost per step is measured by the same stage timers.
+enum class Accuracy : std::uint8_t {
+  GridCells = 0,      // the plain lattice cells as boxes, 8 corner nodes (floats: Fig. 7a)
+  BoundaryNodes = 1,  // FFD AABBs with their 8 boundary nodes
+  CentreOfMass = 2,   // + the surface's centre of mass in the cell (the paper's default)
+  SampleNodes = 3,    // + the 6 face centres and 12 edge midpoints of each FFD AABB
+  SubBoxes = 4,       // each FFD AABB split into k x k x k sub-boxes fitted to the surface
+  Exact = 5,          // surface vertices against surface triangles, with their own broad phase
+};
+inline constexpr int kAccuracyLevels = 6;
+const char* accuracy_name(Accuracy a);
+
 // Scene-wide settings. alpha, beta and gravity are the starting values of State::params,
 // which commands may change while a scene runs.
 struct SimulationSettings {
@@ -108,6 +121,8 @@ struct SimulationSettings {
   int hash_table_size = 4000;            // buckets (paper: 4000); grown for large scenes
   double hash_cell_size = 0.0;           // m; 0 = the largest object cell size
   double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
+  Accuracy accuracy = Accuracy::CentreOfMass;  // starting level; commands may switch it
+  int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect
   GrabSettings grab;                     // used with the "grab" effect
 };

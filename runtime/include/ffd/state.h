@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "ffd/spec.h"
 #include "ffd/types.h"
 
 namespace ffd {
@@ -17,6 +18,7 @@ struct TunableParams {
   // (objects) per object: N/m per spring (mass_spring) or the pull fraction (shape_matching)
   std::vector<double> stiffness;
   double probe_stiffness = 0.0;  // N/m, the probe's virtual coupling spring
+  Accuracy accuracy = Accuracy::CentreOfMass;  // collision accuracy level (spec.h)
 };
 
 // The haptic probe (the "probe" effect): the device position commanded from outside and the

@@ -51,9 +51,9 @@ struct StepReport {
 
 // Working memory of step(): derived per step, never part of the State.
 struct Scratch {
-  // World positions of the 9 nodes of every FFD AABB (8 corners, then centre of mass), and
-  // whether they match the current lattice (a response moves lattice nodes and makes the
-  // boxes of the neighbouring cells stale).
+  // World positions of the 9 nodes of every box of the accuracy level's box set (8 corners,
+  // then the centre node), and whether they match the current lattice (a response moves
+  // lattice nodes and makes the boxes of the neighbouring cells stale).
   std::vector<std::array<Vec3, 9>> box_nodes;
   std::vector<std::uint8_t> box_valid;
   std::vector<Vec3> box_min, box_max;  // world AABB of each box's nodes at hash time
@@ -75,6 +75,8 @@ struct Scratch {
   std::vector<double> spring_inv_denominator;
   std::vector<double> denominator_stiffness;
   std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
+  // Accuracy level 5: corners of the triangles of one cell, 3 per triangle.
+  std::vector<Vec3> triangle_corners;
   // Contacts of the step, for frames; fixed capacity, the excess is counted not stored.
   std::vector<Contact> contacts;
   std::uint32_t contact_count = 0;
@@ -94,8 +96,8 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last);
 // Advances `state` by one step of model.settings.dt and fills `report`.
 void step(const Model& model, State& state, Scratch& scratch, StepReport& report);
 
-// Recomputes every box's nodes from the lattice (eq. 2). Used by step() and by tools
-// that need the boxes of a State (frames, tests).
+// Recomputes the nodes of every box of the State's accuracy level from the lattice (eq. 2),
+// for tools that need the boxes of a State (frames, tests).
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch);
 
 }  // namespace ffd

@@ -36,6 +36,7 @@ struct PairContactMetrics {
   double penetration_m = 0.0;  // deepest vertex of either surface behind the other one
   double gap_m = 0.0;          // smallest distance between the surfaces when not penetrating
   bool near = false;           // some vertex lies within the search radius of the other surface
+  std::size_t penetrating_vertices = 0;  // vertices of either surface behind the other one
 };
 
 // Vertex-to-surface both ways between two posed meshes, within search_radius.

@@ -1,0 +1,132 @@
+// Accuracy levels (spec.h, Accuracy): what each level collides, that every level keeps a
+// resting stack finite and apart, that the coarse level floats and the exact one does not,
+// and that switching by command is deterministic.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "collision.h"
+#include "ffd/command.h"
+#include "ffd/measure.h"
+#include "ffd/step.h"
+#include "support/test_scenes.h"
+
+using namespace ffd;
+using namespace ffd::test;
+
+namespace {
+
+// A sphere dropped onto a box resting on the floor: contacts with a plane and between objects.
+// The ball starts high enough that even level 0's whole-cell boxes do not overlap.
+SceneSpec sphere_on_box() {
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision | Effect::Friction;
+  spec.objects.push_back(box_object("box", Vec3(0.2, 0.1, 0.2), 0.04, Vec3(0.0, 0.051, 0.0)));
+  spec.objects.push_back(sphere_object("ball", 0.06, 0.03, Vec3(0.0, 0.24, 0.0)));
+  spec.planes.push_back(floor_plane());
+  return spec;
+}
+
+State run_at(const Model& model, Accuracy level, int steps) {
+  State state = initial_state(model);
+  Command c;
+  c.kind = CommandKind::SetAccuracy;
+  c.value = static_cast<double>(level);
+  REQUIRE(command_is_valid(model, c));
+  apply_command(model, initial_state(model), state, c);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  for (int i = 0; i < steps; ++i) {
+    step(model, state, scratch, report);
+    REQUIRE(report.finite);
+  }
+  return state;
+}
+
+}  // namespace
+
+TEST_CASE("Accuracy: each level's boxes stay inside their cell and level 4's parts inside their FFD AABB") {
+  const Model model = compile_quietly(sphere_on_box());
+  REQUIRE(model.grid_boxes.size() == model.boxes.size());
+  REQUIRE(model.sub_boxes.size() > model.boxes.size());  // a curved surface fills several parts of a cell
+  REQUIRE(model.box_samples.size() == model.boxes.size());
+  for (Index c = 0; c < model.cell_count(); ++c) {
+    const Index b = model.boxes.cell_box_begin[c];
+    if (model.boxes.cell_box_begin[c + 1] == b) continue;
+    const Vec3 lo = model.boxes.box_local[b][0], hi = model.boxes.box_local[b][7];
+    for (Index s = model.sub_boxes.cell_box_begin[c]; s < model.sub_boxes.cell_box_begin[c + 1]; ++s) {
+      CHECK(model.sub_boxes.box_cell[s] == c);
+      for (const Vec3& p : model.sub_boxes.box_local[s]) {
+        CHECK((p.array() >= -1e-12).all());
+        CHECK((p.array() <= 1.0 + 1e-12).all());
+      }
+    }
+    // Level 3's samples: face centres and edge midpoints lie on the box's surface.
+    for (const Vec3& p : model.box_samples[b]) {
+      const bool on_face = ((p - lo).cwiseAbs().array() < 1e-12).any() || ((p - hi).cwiseAbs().array() < 1e-12).any();
+      CHECK(on_face);
+    }
+  }
+  CHECK(box_level(model, Accuracy::GridCells).boxes == &model.grid_boxes);
+  CHECK(box_level(model, Accuracy::SubBoxes).boxes == &model.sub_boxes);
+  CHECK(box_level(model, Accuracy::CentreOfMass).tested_nodes == 9);
+  CHECK(box_level(model, Accuracy::BoundaryNodes).tested_nodes == 8);
+  CHECK(box_level(model, Accuracy::SampleNodes).samples);
+  CHECK(box_level(model, Accuracy::Exact).exact);
+}
+
+TEST_CASE("Accuracy: every level holds a ball on a box on the floor, level 0 floats and the finer levels do not") {
+  const Model model = compile_quietly(sphere_on_box());
+  double gap[kAccuracyLevels], penetration[kAccuracyLevels];
+  for (int level = 0; level < kAccuracyLevels; ++level) {
+    CAPTURE(level);
+    const State state = run_at(model, static_cast<Accuracy>(level), 800);
+    const SurfaceContactReport contacts = measure_surface_contacts(model, state, 0.1);  // level 0 rests far apart
+    gap[level] = 0.0;
+    penetration[level] = contacts.max_penetration_m;
+    bool ball_on_box = false;
+    for (const SurfaceContact& c : contacts.contacts) {
+      if (c.a == "box" && c.b == "ball") ball_on_box = true;
+      gap[level] = std::max(gap[level], c.gap_m);
+    }
+    CHECK(ball_on_box);                   // the ball came to rest on the box, not through it
+    CHECK(penetration[level] < 0.01);     // m: less than a third of the ball's cell
+  }
+  // Level 0's boxes are whole cells: the surfaces rest on the cells' margins, apart.
+  CHECK(gap[0] > 2.0 * gap[2]);
+  CHECK(gap[0] > 0.004);
+  // The exact level touches closest.
+  CHECK(gap[5] < 0.002);
+}
+
+TEST_CASE("Accuracy: a level switched by command mid-run gives the same state every time") {
+  const Model model = compile_quietly(sphere_on_box());
+  auto run = [&] {
+    State state = initial_state(model);
+    const State initial = state;
+    Scratch scratch = make_scratch(model);
+    StepReport report;
+    for (int i = 0; i < 600; ++i) {
+      if (i % 100 == 50) {
+        Command c;
+        c.kind = CommandKind::SetAccuracy;
+        c.value = static_cast<double>((i / 100) % kAccuracyLevels);
+        apply_command(model, initial, state, c);
+      }
+      step(model, state, scratch, report);
+    }
+    return state_hash(state);
+  };
+  const std::uint64_t first = run();
+  CHECK(run() == first);
+  CHECK(first != state_hash(run_at(model, Accuracy::CentreOfMass, 600)));  // the switches changed the run
+}
+
+TEST_CASE("Accuracy: out-of-range levels are refused as commands") {
+  const Model model = compile_quietly(sphere_on_box());
+  Command c;
+  c.kind = CommandKind::SetAccuracy;
+  for (double bad : {-1.0, 6.0, 2.5, std::nan("")}) {
+    c.value = bad;
+    CHECK_FALSE(command_is_valid(model, c));
+  }
+}

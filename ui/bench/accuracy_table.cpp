@@ -1,0 +1,168 @@
+#include "bench/accuracy_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ffd/command.h"
+#include "ffd/measure.h"
+#include "ffd/step.h"
+
+namespace ffdbench {
+
+AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
+                         std::uint64_t sample_every, const Progress& progress) {
+  AccuracyRun run;
+  run.scene = scene;
+  run.level = level;
+  run.steps = steps;
+  ffd::State state = ffd::initial_state(model);
+  const ffd::State initial = state;
+  // The level is switched as a command would switch it: the same path a user takes.
+  ffd::Command command;
+  command.kind = ffd::CommandKind::SetAccuracy;
+  command.value = static_cast<double>(level);
+  ffd::apply_command(model, initial, state, command);
+  ffd::Scratch scratch = ffd::make_scratch(model);
+  ffd::StepReport report;
+  std::vector<double> collision_ms, step_ms, gaps, penetrations, penetrating;
+  collision_ms.reserve(steps);
+  step_ms.reserve(steps);
+  const std::string what = scene + ": level " + std::to_string(static_cast<int>(level));
+  const std::uint64_t report_every = std::max<std::uint64_t>(1, steps / 100);
+  for (std::uint64_t i = 1; i <= steps; ++i) {
+    ffd::step(model, state, scratch, report);
+    ffd::grow_scratch(model, scratch, report);
+    run.finite = run.finite && report.finite;
+    const std::int64_t collision_ns = stage(report, ffd::Stage::BoxUpdate) + stage(report, ffd::Stage::BroadPhase) +
+                                      stage(report, ffd::Stage::NarrowPhase) + stage(report, ffd::Stage::Planes);
+    collision_ms.push_back(static_cast<double>(collision_ns) * 1e-6);
+    step_ms.push_back(static_cast<double>(report.total_ns) * 1e-6);
+    if (i > steps / 2 && i % sample_every == 0 && run.finite) {
+      const ffd::SurfaceContactReport contacts = ffd::measure_surface_contacts(model, state);
+      double gap = 0.0;
+      for (const ffd::SurfaceContact& c : contacts.contacts)
+        if (c.penetration_m == 0.0) gap = std::max(gap, c.gap_m);
+      gaps.push_back(gap * 1e3);
+      penetrations.push_back(contacts.max_penetration_m * 1e3);
+      penetrating.push_back(static_cast<double>(contacts.penetrating_vertices));
+      run.penetrating_vertices_max = std::max(run.penetrating_vertices_max, contacts.penetrating_vertices);
+    }
+    if (i % report_every == 0 || i == steps) progress(what, i, steps);
+  }
+  run.samples = gaps.size();
+  run.collision_p50_ms = percentile(collision_ms, 0.5);
+  run.collision_p99_ms = percentile(collision_ms, 0.99);
+  run.step_p50_ms = percentile(step_ms, 0.5);
+  run.gap_mean_mm = mean(gaps);
+  run.gap_max_mm = gaps.empty() ? 0.0 : *std::max_element(gaps.begin(), gaps.end());
+  run.penetration_mean_mm = mean(penetrations);
+  run.penetration_max_mm = penetrations.empty() ? 0.0 : *std::max_element(penetrations.begin(), penetrations.end());
+  run.penetrating_vertices_mean = mean(penetrating);
+  return run;
+}
+
+namespace {
+
+const AccuracyRun* find_run(const std::vector<AccuracyRun>& runs, const std::string& scene, ffd::Accuracy level) {
+  for (const AccuracyRun& r : runs)
+    if (r.scene == scene && r.level == level) return &r;
+  return nullptr;
+}
+
+std::vector<std::string> scenes_of(const std::vector<AccuracyRun>& runs) {
+  std::vector<std::string> scenes;
+  for (const AccuracyRun& r : runs)
+    if (std::find(scenes.begin(), scenes.end(), r.scene) == scenes.end()) scenes.push_back(r.scene);
+  return scenes;
+}
+
+}  // namespace
+
+std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::string& cpu, std::uint64_t steps) {
+  std::ostringstream s;
+  s << "Measured by `ffdsim accuracy` on " << cpu << ": each scene run " << steps
+    << " steps (1 ms) at every level from the same start. Collision = box update + broad + narrow phase + planes, "
+       "per step. Gap, penetration and penetrating vertices are measured on the exact embedded surfaces every 50 ms "
+       "over the second half of the run (the worst pair of each sample; mean and max over the samples).\n\n";
+  for (const std::string& scene : scenes_of(runs)) {
+    s << "**" << scene << "**\n\n"
+      << "| level | collision ms p50 | p99 | step ms p50 | gap mm mean | max | penetration mm mean | max | "
+         "penetrating vertices mean | max |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const AccuracyRun& r : runs) {
+      if (r.scene != scene) continue;
+      s << "| " << static_cast<int>(r.level) << " " << ffd::accuracy_name(r.level) << (r.finite ? "" : " (NOT FINITE)")
+        << " | " << fixed(r.collision_p50_ms, 3) << " | " << fixed(r.collision_p99_ms, 3) << " | "
+        << fixed(r.step_p50_ms, 2) << " | " << fixed(r.gap_mean_mm, 2) << " | " << fixed(r.gap_max_mm, 2) << " | "
+        << fixed(r.penetration_mean_mm, 2) << " | " << fixed(r.penetration_max_mm, 2) << " | "
+        << fixed(r.penetrating_vertices_mean, 0) << " | " << r.penetrating_vertices_max << " |\n";
+    }
+    const AccuracyRun* paper = find_run(runs, scene, ffd::Accuracy::CentreOfMass);
+    const AccuracyRun* exact = find_run(runs, scene, ffd::Accuracy::Exact);
+    if (paper && exact && paper->collision_p50_ms > 0.0) {
+      s << "\nLevel 2 (the paper's) against level 5 (exact): " << fixed(exact->collision_p50_ms / paper->collision_p50_ms, 1)
+        << "x cheaper per step; gap max " << fixed(paper->gap_max_mm, 2) << " mm vs " << fixed(exact->gap_max_mm, 2)
+        << " mm; penetration max " << fixed(paper->penetration_max_mm, 2) << " mm vs "
+        << fixed(exact->penetration_max_mm, 2) << " mm.\n";
+    }
+    s << "\n";
+  }
+  return s.str();
+}
+
+nlohmann::json to_json(const std::vector<AccuracyRun>& runs) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const AccuracyRun& r : runs) {
+    out.push_back({{"scene", r.scene},
+                   {"level", static_cast<int>(r.level)},
+                   {"level_name", ffd::accuracy_name(r.level)},
+                   {"steps", r.steps},
+                   {"samples", r.samples},
+                   {"collision_p50_ms", r.collision_p50_ms},
+                   {"collision_p99_ms", r.collision_p99_ms},
+                   {"step_p50_ms", r.step_p50_ms},
+                   {"gap_mean_mm", r.gap_mean_mm},
+                   {"gap_max_mm", r.gap_max_mm},
+                   {"penetration_mean_mm", r.penetration_mean_mm},
+                   {"penetration_max_mm", r.penetration_max_mm},
+                   {"penetrating_vertices_mean", r.penetrating_vertices_mean},
+                   {"penetrating_vertices_max", r.penetrating_vertices_max},
+                   {"finite", r.finite}});
+  }
+  return out;
+}
+
+std::string gnuplot_script(const std::vector<AccuracyRun>& runs, const std::string& png) {
+  std::ostringstream s;
+  s << "set terminal pngcairo size 1100,480 font 'DejaVu Sans,10'\n"
+    << "set output '" << png << "'\n"
+    << "set multiplot layout 1,2 title 'What accuracy costs: contact error against collision time per step "
+       "(numbers: accuracy level)'\n"
+    << "set logscale x\nset grid\nset key top right\nset xlabel 'collision time per step, ms (p50, log scale)'\n";
+  const std::vector<std::string> scenes = scenes_of(runs);
+  const char* panels[2][2] = {{"gap", "widest gap between surfaces at rest, mm (max)"},
+                              {"penetration", "deepest penetration, mm (max)"}};
+  for (const auto& panel : panels) {
+    s << "set ylabel '" << panel[1] << "'\nplot ";
+    for (std::size_t i = 0; i < scenes.size(); ++i) {
+      s << (i ? ", " : "") << "'-' using 1:2 with linespoints pt 7 lc " << i + 1 << " title '" << scenes[i]
+        << "', '-' using 1:2:3 with labels offset 0.8,0.8 tc lt " << i + 1 << " notitle";
+    }
+    s << "\n";
+    for (const std::string& scene : scenes)
+      for (int copy = 0; copy < 2; ++copy) {
+        for (const AccuracyRun& r : runs) {
+          if (r.scene != scene) continue;
+          const double y = std::string(panel[0]) == "gap" ? r.gap_max_mm : r.penetration_max_mm;
+          s << std::max(r.collision_p50_ms, 1e-3) << " " << y << " " << static_cast<int>(r.level) << "\n";
+        }
+        s << "e\n";
+      }
+  }
+  s << "unset multiplot\n";
+  return s.str();
+}
+
+}  // namespace ffdbench

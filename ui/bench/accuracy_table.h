@@ -1,0 +1,46 @@
+#pragma once
+// What accuracy costs in time: a scene run at every accuracy level (spec.h, Accuracy) from
+// the same start, with the collision time per step from the step's own stage timers and the
+// contact accuracy measured on the exact embedded surfaces outside the timed path (gap
+// between surfaces at rest on each other, penetration, penetrating vertices).
+// `ffdsim accuracy` prints the table and plots accuracy against time per step.
+#include <cstdint>
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "bench/paper_table.h"
+#include "ffd/model.h"
+
+namespace ffdbench {
+
+struct AccuracyRun {
+  std::string scene;  // the scene's name
+  ffd::Accuracy level = ffd::Accuracy::CentreOfMass;
+  std::uint64_t steps = 0, samples = 0;
+  double collision_p50_ms = 0, collision_p99_ms = 0;  // box update + broad + narrow + planes
+  double step_p50_ms = 0;
+  // Over the surface samples of the settled part of the run (the second half), each
+  // sample's worst pair: the widest gap between surfaces within a cell size of each other
+  // that do not penetrate, and the deepest penetration.
+  double gap_mean_mm = 0, gap_max_mm = 0;
+  double penetration_mean_mm = 0, penetration_max_mm = 0;
+  double penetrating_vertices_mean = 0;
+  std::size_t penetrating_vertices_max = 0;
+  bool finite = true;
+};
+
+// Runs `model` for `steps` steps at `level`; samples the surfaces every `sample_every`
+// steps over the second half.
+AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
+                         std::uint64_t sample_every, const Progress& progress);
+
+// Markdown: one table per scene, and a line per scene on what level 2 costs against level 5.
+std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::string& cpu, std::uint64_t steps);
+nlohmann::json to_json(const std::vector<AccuracyRun>& runs);
+
+// A gnuplot script that draws `png`: max gap and max penetration (mm) against the collision
+// time per step (ms, p50), one series per scene, points labelled with their level.
+std::string gnuplot_script(const std::vector<AccuracyRun>& runs, const std::string& png);
+
+}  // namespace ffdbench

@@ -1,0 +1,70 @@
+#include "output_files.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace ffdsim {
+
+ProgressBar::ProgressBar(std::string command, bool quiet)
+    : command_(std::move(command)), quiet_(quiet), terminal_(isatty(STDERR_FILENO) == 1) {}
+
+void ProgressBar::operator()(const std::string& what, std::uint64_t done, std::uint64_t total) {
+  if (quiet_) return;
+  if (!terminal_) {
+    if (what != last_)
+      std::fprintf(stderr, "%s: %s (%llu steps)\n", command_.c_str(), what.c_str(), static_cast<unsigned long long>(total));
+    last_ = what;
+    return;
+  }
+  constexpr int kWidth = 30;
+  const double fraction = total ? static_cast<double>(done) / static_cast<double>(total) : 1.0;
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::string bar(static_cast<std::size_t>(filled), '#');
+  bar.resize(kWidth, '.');
+  std::fprintf(stderr, "\r\033[K%-28s [%s] %3d%%  %llu/%llu", what.c_str(), bar.c_str(), static_cast<int>(fraction * 100.0),
+               static_cast<unsigned long long>(done), static_cast<unsigned long long>(total));
+  std::fflush(stderr);
+  last_ = what;
+}
+
+void ProgressBar::finish_line(const std::string& text) {
+  if (quiet_) return;
+  std::fprintf(stderr, terminal_ ? "\r\033[K%s\n" : "%s\n", text.c_str());
+}
+
+void write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
+                            const std::string& body) {
+  const std::string begin = "<!-- " + name + ":begin -->", end = "<!-- " + name + ":end -->";
+  const std::size_t b = text.find(begin), e = text.find(end);
+  if (b == std::string::npos || e == std::string::npos || e < b)
+    throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
+  return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
+}
+
+std::string today() {
+  const std::time_t now = std::time(nullptr);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%d", std::gmtime(&now));
+  return buffer;
+}
+
+}  // namespace ffdsim
