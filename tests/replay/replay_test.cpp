@@ -201,7 +201,7 @@ TEST_CASE("Replay: a recorded session replays bit for bit, fast and in real time
   std::filesystem::remove(path);
 }
 
-TEST_CASE("Replay scripts: energy gain, position and rest assertions read strictly") {
+TEST_CASE("Replay scripts: the energy gain and position and rest assertions read strictly") {
   const LoadedReplay replay = parse(script_with(R"(
 [assert.stability]
 energy_gain_max_j = 0.5
@@ -260,7 +260,7 @@ speed_max_m_s = 0.02
   }
 }
 
-TEST_CASE("Replay: energy gain, position and rest assertions measure the run") {
+TEST_CASE("Replay: the energy gain and position and rest assertions measure the run") {
   // The upper box falls 4 cm onto the lower one and settles; the probe hovers 15 cm above.
   const LoadedReplay settled = parse(R"(version = 1
 scene = ")" + kScene + R"("
