@@ -38,8 +38,42 @@ struct GapMeasure {
 std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
   std::uint64_t g = 0;
   for (const GapLimit& gap : script.gaps) g = std::gcd(g, gap.every_steps);
+  for (const PositionLimit& p : script.positions) g = std::gcd(g, p.every_steps);
+  if (script.rest.speed_max_m_s) g = std::gcd(g, script.rest.every_steps);
   return g;
 }
+
+// Mass-weighted centre of each object's lattice nodes.
+void centres_of_mass(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& out) {
+  out.resize(model.objects.size());
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& o = model.objects[i];
+    Vec3 sum = Vec3::Zero();
+    double mass = 0.0;
+    for (Index n = o.node_begin; n < o.node_end; ++n) {
+      sum += model.node_mass[n] * x[n];
+      mass += model.node_mass[n];
+    }
+    out[i] = sum / mass;
+  }
+}
+
+std::string vector_text(const Vec3& v) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "[%.10g, %.10g, %.10g]", v.x(), v.y(), v.z());
+  return buffer;
+}
+
+// Positions of one position assertion over its samples.
+struct PositionMeasure {
+  std::uint64_t samples = 0;
+  Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 high = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  double worst_outside_m = 0.0;  // farthest outside [min, max] along any axis (0: never outside)
+  std::uint64_t worst_step = 0;
+  Index worst_object = 0;
+  Vec3 worst_position = Vec3::Zero();
+};
 
 std::uint64_t hash_interval(const ReplayScript& script) {
   if (script.hash_every) return script.hash_every;
@@ -77,7 +111,8 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   options.budget_ns = run_options.budget_ns;
   options.stop_at_step = script.steps;
   options.hash_every = static_cast<std::uint32_t>(hash_interval(script));
-  options.energy_every = 10;
+  // Every step when the energy gain is asserted: impact peaks last a step or two.
+  options.energy_every = script.stability.energy_gain_max_j ? 1 : 10;
   options.frame_every = 0;  // nobody looks
   options.snapshot_every = static_cast<std::uint32_t>(gcd_of_sample_steps(script));
   // Commands for the whole run wait in the loop's queue from the start.
@@ -92,6 +127,24 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   double largest_cell = 0.0;
   for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
   State surface_state = initial_state(model);  // holds a snapshot's lattice for deformed_surface()
+  std::vector<PositionMeasure> positions(script.positions.size());
+  std::vector<Vec3> centres, rest_centres;  // this snapshot's centres of mass; the last rest sample's
+  std::optional<std::uint64_t> rest_step;   // the step of the last rest sample
+  double rest_max_speed = 0.0;
+  std::uint64_t rest_samples = 0, rest_worst_step = 0;
+  Index rest_worst_object = 0;
+
+  // The probe's work: the device moves by d_k - d_(k-1) at the start of step k against the
+  // coupling force output F (the force on the device), so the device puts in
+  // -(F_(k-1) + F_k) / 2 . (d_k - d_(k-1)) (trapezoidal rule; exact for the spring alone).
+  // A coupling stiffness change k -> k' adds (k' - k) |x - d|^2 / 2 to the coupling spring.
+  // Device poses, stiffness changes and resets come from the script, in step order.
+  const State initial = initial_state(model);
+  result.initial_energy_j = compute_energy(model, initial).total();
+  std::size_t next_command = 0;
+  Vec3 device = initial.probe.device, device_before = device, probe_before = initial.probe.x;
+  Vec3 force_before = Vec3::Zero();
+  double coupling_stiffness = initial.params.probe_stiffness;
 
   auto drain = [&] {
     Telemetry t;
@@ -109,7 +162,34 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
           at = t.step;
         }
       };
-      if (t.has_energy) track(t.energy_j, result.max_energy_j, result.max_energy_step);
+      // Commands stamped for steps before t.step were applied before this step.
+      for (; next_command < script.commands.size() && script.commands[next_command].step < t.step; ++next_command) {
+        const Command& c = script.commands[next_command];
+        if (c.kind == CommandKind::ProbePose) {
+          device = c.vector;
+        } else if (c.kind == CommandKind::SetProbeStiffness) {
+          result.probe_work_j += 0.5 * (c.value - coupling_stiffness) * (probe_before - device_before).squaredNorm();
+          coupling_stiffness = c.value;
+        } else if (c.kind == CommandKind::Reset) {  // back to the initial energy, nothing put in
+          device = device_before = probe_before = initial.probe.device;
+          force_before = Vec3::Zero();
+          coupling_stiffness = initial.params.probe_stiffness;
+          result.probe_work_j = 0.0;
+        }
+      }
+      result.probe_work_j -= 0.5 * (force_before + t.probe_force_n).dot(device - device_before);
+      force_before = t.probe_force_n;
+      device_before = device;
+      probe_before = t.probe_position;
+      if (t.has_energy) {
+        track(t.energy_j, result.max_energy_j, result.max_energy_step);
+        const double gain = t.energy_j - result.initial_energy_j - result.probe_work_j;
+        if (gain > result.max_energy_gain_j) {
+          result.max_energy_gain_j = gain;
+          result.max_energy_gain_step = t.step;
+          result.probe_work_at_max_gain_j = result.probe_work_j;
+        }
+      }
       track(t.max_speed_m_s, result.max_speed_m_s, result.max_speed_step);
       track(t.max_penetration_m, result.max_penetration_m, result.max_penetration_step);
       result.mean_contacts += t.contacts;  // summed here, divided at the end
@@ -126,6 +206,41 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       std::copy(s->x.begin(), s->x.end(), surface_state.x.begin());
       const std::uint64_t step = s->step;
       loop.recycle(s);
+      if (!script.positions.empty() || script.rest.speed_max_m_s) centres_of_mass(model, surface_state.x, centres);
+      for (std::size_t i = 0; i < script.positions.size(); ++i) {
+        const PositionLimit& p = script.positions[i];
+        if (step < p.from_step || step > p.to_step || step % p.every_steps != 0) continue;
+        PositionMeasure& out = positions[i];
+        ++out.samples;
+        for (Index object : p.objects) {
+          const Vec3 c = centres[object] - (p.relative_to ? centres[*p.relative_to] : Vec3::Zero());
+          out.low = out.low.cwiseMin(c);
+          out.high = out.high.cwiseMax(c);
+          const double outside = std::max((p.min - c).maxCoeff(), (c - p.max).maxCoeff());
+          if (outside > out.worst_outside_m) {
+            out.worst_outside_m = outside;
+            out.worst_step = step;
+            out.worst_object = object;
+            out.worst_position = c;
+          }
+        }
+      }
+      if (script.rest.speed_max_m_s && step >= script.rest.from_step && step % script.rest.every_steps == 0) {
+        if (rest_step) {
+          const double seconds = static_cast<double>(step - *rest_step) * model.settings.dt;
+          for (std::size_t o = 0; o < centres.size(); ++o) {
+            const double speed = (centres[o] - rest_centres[o]).norm() / seconds;
+            if (speed > rest_max_speed) {
+              rest_max_speed = speed;
+              rest_worst_step = step;
+              rest_worst_object = static_cast<Index>(o);
+            }
+          }
+          ++rest_samples;
+        }
+        rest_centres = centres;
+        rest_step = step;
+      }
       for (std::size_t i = 0; i < script.gaps.size(); ++i) {
         const GapLimit& g = script.gaps[i];
         if (step < g.from_step || step > g.to_step || step % g.every_steps != 0) continue;
@@ -207,6 +322,17 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   }
   check_upper(out, "stability.energy_max_j", "", script.stability.energy_max_j, result.max_energy_j, "J", false,
               result.max_energy_step);
+  if (script.stability.energy_gain_max_j) {
+    AssertionResult a;
+    a.name = "stability.energy_gain_max_j";
+    a.measured = number(result.max_energy_gain_j, "J") + " at step " + std::to_string(result.max_energy_gain_step) +
+                 " (energy " + number(result.max_energy_gain_j + result.initial_energy_j + result.probe_work_at_max_gain_j, "J") +
+                 ", initial " + number(result.initial_energy_j, "J") + " + probe work " +
+                 number(result.probe_work_at_max_gain_j, "J") + ")";
+    a.limit = "<= " + number(*script.stability.energy_gain_max_j, "J") + " above the initial energy + probe work";
+    a.passed = result.steps > 0 && result.max_energy_gain_j <= *script.stability.energy_gain_max_j;
+    out.push_back(a);
+  }
   check_upper(out, "stability.speed_max_m_s", "", script.stability.speed_max_m_s, result.max_speed_m_s, "m/s", false,
               result.max_speed_step);
   check_upper(out, "contact.max_penetration_m", "", script.contact.max_penetration_m, result.max_penetration_m, "m",
@@ -239,6 +365,40 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
     check_upper(out, name + ".max_gap_m", g.where, g.max_gap_m, gaps[i].max_gap_m, "m", false, gaps[i].worst_gap_step);
     check_upper(out, name + ".max_penetration_m", g.where, g.max_penetration_m, gaps[i].max_penetration_m, "m", false,
                 gaps[i].worst_penetration_step);
+  }
+  for (std::size_t i = 0; i < script.positions.size(); ++i) {
+    const PositionLimit& p = script.positions[i];
+    const PositionMeasure& m = positions[i];
+    AssertionResult a;
+    a.name = "position[" + p.pattern + (p.relative_to ? " - " + p.relative_to_name : std::string()) + "]";
+    a.where = p.where;
+    a.limit = "within " + vector_text(p.min) + " .. " + vector_text(p.max) + " m";
+    if (m.samples == 0) {
+      a.measured = "no samples (snapshots dropped or the run ended early)";
+      a.passed = false;
+    } else if (m.worst_outside_m > 0.0) {
+      a.measured = model.objects[m.worst_object].name + " at " + vector_text(m.worst_position) + " m at step " +
+                   std::to_string(m.worst_step) + ", " + number(m.worst_outside_m, "m") + " outside";
+      a.passed = false;
+    } else {
+      a.measured = "from " + vector_text(m.low) + " to " + vector_text(m.high) + " m over " +
+                   std::to_string(m.samples) + " samples";
+    }
+    out.push_back(a);
+  }
+  if (script.rest.speed_max_m_s) {
+    AssertionResult a;
+    a.name = "rest.speed_max_m_s";
+    a.limit = "<= " + number(*script.rest.speed_max_m_s, "m/s") + " from step " + std::to_string(script.rest.from_step);
+    if (rest_samples == 0) {
+      a.measured = "no samples (snapshots dropped or the run ended early)";
+      a.passed = false;
+    } else {
+      a.measured = number(rest_max_speed, "m/s") + " (" + model.objects[rest_worst_object].name + ", step " +
+                   std::to_string(rest_worst_step) + ")";
+      a.passed = rest_max_speed <= *script.rest.speed_max_m_s;
+    }
+    out.push_back(a);
   }
   check_upper(out, "force.max_n", "", script.force.max_n, result.peak_force_n, "N", false, result.peak_force_step);
   if (script.force.peak_min_n) {
@@ -331,6 +491,9 @@ std::string replay_result_json(const ReplayScript& script, const ReplayResult& r
                   {"memory_locked", result.latency.memory_locked}};
   j["finite"] = result.finite;
   j["max_energy_j"] = result.max_energy_j;
+  j["initial_energy_j"] = result.initial_energy_j;
+  j["probe_work_j"] = result.probe_work_j;
+  if (script.stability.energy_gain_max_j) j["max_energy_gain_j"] = result.max_energy_gain_j;
   j["max_speed_m_s"] = result.max_speed_m_s;
   j["max_penetration_m"] = result.max_penetration_m;
   j["peak_force_n"] = result.peak_force_n;

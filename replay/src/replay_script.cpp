@@ -23,14 +23,18 @@ const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
 const std::vector<std::string_view> kPathKeys = {"interpolation", "keyframes"};
 const std::vector<std::string_view> kKeyframeKeys = {"at_step", "at_ms", "position"};
 const std::vector<std::string_view> kInterpolations = {"linear", "smooth", "step"};
-const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "force", "hash"};
+const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "position", "rest",
+                                                   "force", "hash"};
 const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p99_us", "compute_max_us",
                                                     "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
                                                     "deadline_misses"};
-const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "speed_max_m_s"};
+const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "energy_gain_max_j", "speed_max_m_s"};
 const std::vector<std::string_view> kContactKeys = {"max_penetration_m", "min_contacts", "from_step", "from_ms"};
 const std::vector<std::string_view> kGapKeys = {"objects", "max_gap_m", "max_penetration_m", "from_step",
                                                 "from_ms", "to_step", "to_ms", "every_steps", "every_ms"};
+const std::vector<std::string_view> kPositionKeys = {"object", "relative_to", "min", "max", "from_step", "from_ms",
+                                                     "to_step", "to_ms", "every_steps", "every_ms"};
+const std::vector<std::string_view> kRestKeys = {"speed_max_m_s", "from_step", "from_ms", "every_steps", "every_ms"};
 const std::vector<std::string_view> kForceKeys = {"max_n", "peak_min_n"};
 const std::vector<std::string_view> kHashKeys = {"step", "value"};
 const std::vector<std::string_view> kRecordKeys = {"hash_every"};
@@ -125,6 +129,14 @@ class ScriptReader {
     if (has_step) return static_cast<std::uint64_t>(t.integer(step_key, 0, 0, kMaxSteps));
     if (has_ms) return ms_to_steps(t, ms_key, kNonNegative);
     if (required) t.fail_missing(step_key, " (or '" + ms_key + "')");
+    return std::nullopt;
+  }
+
+  // A sampling interval given as "every_steps" or "every_ms" (at most one), in steps.
+  std::optional<std::uint64_t> interval_of(const TableReader& t) const {
+    if (t.has("every_steps") && t.has("every_ms")) t.fail_at("every_ms", "give either 'every_steps' or 'every_ms', not both");
+    if (t.has("every_steps")) return static_cast<std::uint64_t>(t.integer("every_steps", 0, 0, kMaxSteps));
+    if (t.has("every_ms")) return ms_to_steps(t, "every_ms", kNonNegative);
     return std::nullopt;
   }
 
@@ -349,6 +361,19 @@ class ScriptReader {
       const TableReader s(origin_, *stability, "assert.stability", kStabilityKeys);
       script.stability.finite = s.boolean("finite", false);
       script.stability.energy_max_j = optional_number(s, "energy_max_j", kAnyValue);
+      script.stability.energy_gain_max_j = optional_number(s, "energy_gain_max_j", kAnyValue);
+      if (script.stability.energy_gain_max_j) {
+        // The gain counts the probe's work as the one input; these commands change the
+        // energy in ways it does not count.
+        for (const Command& c : script.commands) {
+          if (c.kind != CommandKind::Grab && c.kind != CommandKind::Drag && c.kind != CommandKind::SetGravity &&
+              c.kind != CommandKind::SetStiffness)
+            continue;
+          s.fail_at("energy_gain_max_j", std::string("counts the probe's work only, and the script has a '") +
+                                             command_name(c.kind) + "' command at step " + std::to_string(c.step) +
+                                             " (grab, drag, gravity and stiffness commands add energy it does not count)");
+        }
+      }
       script.stability.speed_max_m_s = optional_number(s, "speed_max_m_s", kPositive);
     }
     if (const toml::table* contact = a.subtable("contact")) {
@@ -393,9 +418,46 @@ class ScriptReader {
       gap.to_step = time_of(g, "to", false).value_or(script.steps);
       if (gap.to_step > script.steps) g.fail_here(path, "'to' is after the end of the run");
       if (gap.from_step > gap.to_step) g.fail_here(path, "'from' is after 'to'");
-      gap.every_steps = time_of(g, "every", false).value_or(10);
+      gap.every_steps = interval_of(g).value_or(10);
       if (gap.every_steps == 0) g.fail_here(path, "'every' must be at least one step");
       script.gaps.push_back(gap);
+    }
+    const auto positions = array_of_tables(a, "position");
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      const std::string path = "assert.position[" + std::to_string(i) + "]";
+      const TableReader p(origin_, *positions[i], path, kPositionKeys);
+      PositionLimit limit;
+      limit.where = location(origin_, positions[i]->source());
+      const auto pattern = p.string("object");
+      if (!pattern) p.fail_missing("object", " (an object name, or a name prefix ending in '*')");
+      limit.pattern = *pattern;
+      limit.objects = objects_matching(p, "object", *pattern);
+      if (const auto relative = p.string("relative_to")) {
+        limit.relative_to_name = *relative;
+        limit.relative_to = find_object(p, "relative_to", *relative);
+      }
+      if (!p.has("min") && !p.has("max")) p.fail_here(path, "give 'min' and/or 'max' ([x, y, z], m)");
+      limit.min = p.vec3("min", limit.min);
+      limit.max = p.vec3("max", limit.max);
+      for (int axis = 0; axis < 3; ++axis)
+        if (limit.min[axis] > limit.max[axis]) p.fail_at("max", "is below 'min' on axis " + std::to_string(axis));
+      limit.from_step = time_of(p, "from", false).value_or(0);
+      limit.to_step = time_of(p, "to", false).value_or(script.steps);
+      if (limit.to_step > script.steps) p.fail_here(path, "'to' is after the end of the run");
+      if (limit.from_step > limit.to_step) p.fail_here(path, "'from' is after 'to'");
+      limit.every_steps = interval_of(p).value_or(10);
+      if (limit.every_steps == 0) p.fail_here(path, "'every' must be at least one step");
+      script.positions.push_back(limit);
+    }
+    if (const toml::table* rest = a.subtable("rest")) {
+      const TableReader r(origin_, *rest, "assert.rest", kRestKeys);
+      if (!r.has("speed_max_m_s")) r.fail_missing("speed_max_m_s", " (m/s: the fastest an object's centre of mass may move)");
+      script.rest.speed_max_m_s = r.number("speed_max_m_s", 0.0, kPositive);
+      script.rest.from_step = time_of(r, "from", false).value_or(0);
+      script.rest.every_steps = interval_of(r).value_or(10);
+      if (script.rest.every_steps == 0) r.fail_here("assert.rest", "'every' must be at least one step");
+      if (script.rest.from_step + script.rest.every_steps > script.steps)
+        r.fail_here("assert.rest", "the window from 'from' leaves no whole 'every' interval before the end of the run");
     }
     const auto hashes = array_of_tables(a, "hash");
     for (std::size_t i = 0; i < hashes.size(); ++i) {
@@ -414,6 +476,17 @@ class ScriptReader {
     }
     std::stable_sort(script.hashes.begin(), script.hashes.end(),
                      [](const HashCheck& x, const HashCheck& y) { return x.step < y.step; });
+  }
+
+  // An exact name, or every object whose name starts with the text before a final '*'.
+  std::vector<Index> objects_matching(const TableReader& t, std::string_view key, const std::string& pattern) const {
+    if (pattern.back() != '*') return {find_object(t, key, pattern)};
+    const std::string prefix = pattern.substr(0, pattern.size() - 1);
+    std::vector<Index> found;
+    for (std::size_t i = 0; i < model_->objects.size(); ++i)
+      if (model_->objects[i].name.starts_with(prefix)) found.push_back(static_cast<Index>(i));
+    if (found.empty()) t.fail_at(key, "no object name starts with " + in_quotes(prefix));
+    return found;
   }
 
   Index find_object(const TableReader& t, std::string_view key, const std::string& name) const {

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <thread>
 
@@ -198,4 +199,137 @@ TEST_CASE("Replay: a recorded session replays bit for bit, fast and in real time
              Contains("FAIL determinism.state_hash: diverged: state hash at step 300") &&
                  Contains("last equal at step 275"));
   std::filesystem::remove(path);
+}
+
+TEST_CASE("Replay scripts: the energy gain and position and rest assertions read strictly") {
+  const LoadedReplay replay = parse(script_with(R"(
+[assert.stability]
+energy_gain_max_j = 0.5
+[[assert.position]]
+object = "hi*"
+relative_to = "low"
+min = [-0.1, 0.0, -0.1]
+from_ms = 100
+every_steps = 5
+[assert.rest]
+from_step = 150
+speed_max_m_s = 0.02
+)"));
+  const ReplayScript& s = replay.script;
+  CHECK(s.stability.energy_gain_max_j == 0.5);
+  REQUIRE(s.positions.size() == 1);
+  const PositionLimit& p = s.positions[0];
+  REQUIRE(p.objects.size() == 1);
+  CHECK(replay.model.objects[p.objects[0]].name == "high");
+  CHECK(p.relative_to == Index{0});
+  CHECK(p.min == Vec3(-0.1, 0.0, -0.1));
+  CHECK(p.max.x() == std::numeric_limits<double>::infinity());  // no 'max': unbounded
+  CHECK(p.from_step == 100);
+  CHECK(p.to_step == 200);
+  CHECK(p.every_steps == 5);
+  CHECK(s.rest.speed_max_m_s == 0.02);
+  CHECK(s.rest.from_step == 150);
+  CHECK(s.rest.every_steps == 10);
+
+  struct Case {
+    const char* what;
+    std::string text;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"gain with a grab", script_with("[[event]]\nat_step = 5\ngrab = { object = \"high\", cell = 0, local = [0.5, 0.5, 0.5] }\n"
+                                       "[assert.stability]\nenergy_gain_max_j = 1.0\n"),
+       "test.toml:8:21: assert.stability.energy_gain_max_j: counts the probe's work only, and the script has a 'grab' "
+       "command at step 5"},
+      {"gain with gravity", script_with("[[event]]\nat_step = 5\ngravity = [0, -1, 0]\n[assert.stability]\nenergy_gain_max_j = 1.0\n"),
+       "test.toml:8:21: assert.stability.energy_gain_max_j: counts the probe's work only, and the script has a 'gravity'"},
+      {"no bounds", script_with("[[assert.position]]\nobject = \"high\"\n"), "test.toml:4:1: assert.position[0]: give 'min' and/or 'max'"},
+      {"no such prefix", script_with("[[assert.position]]\nobject = \"box*\"\nmax = [1, 1, 1]\n"),
+       "test.toml:5:10: assert.position[0].object: no object name starts with 'box'"},
+      {"min above max", script_with("[[assert.position]]\nobject = \"high\"\nmin = [0, 2, 0]\nmax = [1, 1, 1]\n"),
+       "test.toml:7:7: assert.position[0].max: is below 'min' on axis 1"},
+      {"unknown relative", script_with("[[assert.position]]\nobject = \"high\"\nrelative_to = \"lwo\"\nmax = [1, 1, 1]\n"),
+       "test.toml:6:15: assert.position[0].relative_to: no object named 'lwo' in the scene; did you mean 'low'?"},
+      {"rest without a speed", script_with("[assert.rest]\nfrom_step = 10\n"), "test.toml:4:1: assert.rest.speed_max_m_s: missing required key"},
+      {"rest after the end", script_with("[assert.rest]\nfrom_step = 195\nspeed_max_m_s = 1.0\n"),
+       "test.toml:4:1: assert.rest: the window from 'from' leaves no whole 'every' interval"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.what);
+    REQUIRE_THROWS_WITH(parse(c.text), StartsWith(c.message));
+  }
+}
+
+TEST_CASE("Replay: the energy gain and position and rest assertions measure the run") {
+  // The upper box falls 4 cm onto the lower one and settles; the probe hovers 15 cm above.
+  const LoadedReplay settled = parse(R"(version = 1
+scene = ")" + kScene + R"("
+steps = 600
+[assert.stability]
+energy_gain_max_j = 5.0
+[[assert.position]]
+object = "high"
+relative_to = "low"
+min = [-0.05, 0.09, -0.05]
+max = [0.05, 0.11, 0.05]
+from_step = 400
+[[assert.position]]
+object = "*"
+min = [-0.2, 0.04, -0.2]
+[assert.rest]
+from_step = 400
+every_steps = 50
+speed_max_m_s = 0.05
+)");
+  const ReplayResult result = run_replay(settled, ReplayRunOptions{});
+  INFO(format_replay_result(settled.script, result));
+  CHECK(result.passed());
+  CHECK(result.probe_work_j == 0.0);  // the device never moved
+  // 2.83 J above the 2.46 J it starts with as the 20,000 N/m boxes meet (eq. 9), then less.
+  CHECK(result.max_energy_gain_j > 0.0);
+  CHECK(result.max_energy_gain_j <= 5.0);
+  CHECK(result.initial_energy_j > 0.0);
+
+  // The same run with limits it does not meet: each failure names what it measured.
+  const LoadedReplay strict = parse(R"(version = 1
+scene = ")" + kScene + R"("
+steps = 600
+[assert.stability]
+energy_gain_max_j = -1.0
+[[assert.position]]
+object = "high"
+max = [1.0, 0.1, 1.0]
+[assert.rest]
+from_step = 0
+every_steps = 50
+speed_max_m_s = 0.01
+)");
+  const ReplayResult failed = run_replay(strict, ReplayRunOptions{});
+  const std::string text = format_replay_result(strict.script, failed);
+  CHECK_FALSE(failed.passed());
+  CHECK_THAT(text, Contains("FAIL stability.energy_gain_max_j:") && Contains("initial ") && Contains("probe work 0 J"));
+  CHECK_THAT(text, Contains("FAIL position[high]: high at [") && Contains("m outside"));
+  CHECK_THAT(text, Contains("FAIL rest.speed_max_m_s:") && Contains("(high, step 100)"));
+}
+
+TEST_CASE("Replay: the probe's work counts as energy put in") {
+  // The device goes down into the resting boxes and up again: the work it does is counted,
+  // and the gain is the energy above the initial energy plus that work.
+  const LoadedReplay replay = parse(R"(version = 1
+scene = ")" + kScene + R"("
+steps = 700
+[[probe_path]]
+keyframes = [ { at_step = 300, position = [0.0, 0.4, 0.0] }, { at_step = 450, position = [0.02, 0.17, 0.0] },
+              { at_step = 600, position = [0.0, 0.4, 0.0] } ]
+[assert.stability]
+energy_gain_max_j = 1e6
+)");
+  const ReplayResult result = run_replay(replay, ReplayRunOptions{});
+  INFO(format_replay_result(replay.script, result));
+  REQUIRE(result.passed());
+  CHECK(result.peak_force_n > 1.0);  // the probe pressed
+  CHECK(result.probe_work_j > 0.0);
+  // The energy at the step of the largest gain is one of the sampled energies.
+  CHECK(result.max_energy_gain_j + result.initial_energy_j + result.probe_work_at_max_gain_j <=
+        result.max_energy_j + 1e-9);
 }

@@ -2,6 +2,7 @@
 // Runs a replay script on the physics loop (fast or real time), checks its assertions while
 // the telemetry streams in, and says which failed with the measured values.
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +42,12 @@ struct ReplayResult {
   double mean_contacts = 0.0;  // contacts per step over the whole run
   // The step each maximum above was reached at.
   std::uint64_t max_energy_step = 0, max_speed_step = 0, max_penetration_step = 0, peak_force_step = 0;
+  // Energy against what went in: the initial total energy, the work the probe's device has
+  // done (trapezoidal rule over the coupling force and the device's moves), and the most the
+  // total energy rose above their sum, with the step and the probe work up to that step.
+  double initial_energy_j = 0.0, probe_work_j = 0.0;
+  double max_energy_gain_j = -std::numeric_limits<double>::infinity(), probe_work_at_max_gain_j = 0.0;
+  std::uint64_t max_energy_gain_step = 0;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> hashes;  // (step, state hash) the run produced
   std::optional<std::uint64_t> first_divergence;  // first hash check that differed
   std::uint64_t final_hash = 0;

@@ -4,6 +4,7 @@
 // Every error names the file, the line, the column and the field:
 //   "poke.toml:14:9: event[2].alpha: must be in [0, 1] (got 1.5)"
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,6 +29,9 @@ struct LatencyLimits {  // microseconds; lateness and misses only mean something
 struct StabilityLimits {
   bool finite = false;                 // every step finite
   std::optional<double> energy_max_j;  // total energy (kinetic + gravity + elastic) never above
+  // The total energy never more than this above what went in: the initial energy plus the
+  // work the probe's device has done so far (sampled every step when given).
+  std::optional<double> energy_gain_max_j;
   std::optional<double> speed_max_m_s; // no lattice node faster than this
 };
 
@@ -48,6 +52,29 @@ struct GapLimit {
   std::optional<double> max_gap_m;          // the surfaces stay within this of each other
   std::optional<double> max_penetration_m;  // and sink no deeper into each other
   std::uint64_t from_step = 0, to_step = 0;
+  std::uint64_t every_steps = 10;
+};
+
+// The centre of mass of each named object (lattice nodes, mass-weighted), optionally minus
+// that of another object, stays inside [min, max] every `every_steps` steps in
+// [from_step, to_step]; an axis without a bound has -inf / +inf.
+struct PositionLimit {
+  std::string where;
+  std::string pattern;             // as written: an object name, or "prefix*"
+  std::vector<Index> objects;      // the objects it names
+  std::optional<Index> relative_to;
+  std::string relative_to_name;
+  Vec3 min = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  Vec3 max = Vec3::Constant(std::numeric_limits<double>::infinity());
+  std::uint64_t from_step = 0, to_step = 0;
+  std::uint64_t every_steps = 10;
+};
+
+// The scene comes to rest: from `from_step` on, no object's centre of mass moves faster
+// than `speed_max_m_s`, averaged over each `every_steps` interval.
+struct RestLimit {
+  std::optional<double> speed_max_m_s;
+  std::uint64_t from_step = 0;
   std::uint64_t every_steps = 10;
 };
 
@@ -74,6 +101,8 @@ struct ReplayScript {
   StabilityLimits stability;
   ContactLimits contact;
   std::vector<GapLimit> gaps;
+  std::vector<PositionLimit> positions;
+  RestLimit rest;
   ForceLimits force;
   std::vector<HashCheck> hashes;     // ordered by step
 };
