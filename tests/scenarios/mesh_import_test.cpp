@@ -264,3 +264,46 @@ TEST_CASE("import_mesh reports unreadable files with the path and the reason", "
                        "refers to vertex 7 of a mesh with 3 vertices");
   }
 }
+
+TEST_CASE("import_mesh rejects files and headers over its limits before reading them", "[mesh_import]") {
+  TempDir dir;
+  const std::string ply_head = "ply\nformat ascii 1.0\nelement vertex ";
+  const std::string ply_tail = "\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
+  SECTION("a PLY header declaring more vertices than the file holds") {
+    const std::string text = ply_head + "4000000000" + ply_tail;
+    check_import_error(dir.write("huge.ply", text), "line 3 of the PLY header: element 'vertex' declares 4000000000 "
+                                                    "entries, more than a file of " +
+                                                        std::to_string(text.size()) + " bytes holds");
+  }
+  SECTION("a PLY count beyond 64 bits") {
+    check_import_error(dir.write("huger.ply", ply_head + "99999999999999999999999" + ply_tail),
+                       "element 'vertex' declares 99999999999999999999999 entries");
+  }
+  SECTION("a PLY header without its end") {
+    check_import_error(dir.write("endless.ply", ply_head + "4\nproperty float x\n"),
+                       "the PLY header has no end_header line");
+  }
+  SECTION("a PLY header with a line assimp would misread") {
+    check_import_error(dir.write("odd.ply", ply_head + "4\nproperty list float int vertex_indices\nend_header\n"),
+                       "line 4 of the PLY header: expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE "
+                       "NAME' after an element");
+    check_import_error(dir.write("unknown.ply", ply_head + "4\nproperty float x\nvertex 1 2 3\nend_header\n"),
+                       "line 5 of the PLY header: unknown header line 'vertex'");
+  }
+  SECTION("an OFF header declaring more faces than the file holds") {
+    const std::string text = "OFF\n# a comment\n3 2000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    check_import_error(dir.write("huge.off", text),
+                       "line 3: the header declares 2000000000 faces, more than a file of " +
+                           std::to_string(text.size()) + " bytes holds");
+  }
+  SECTION("an OFF header with its counts on the keyword line") {
+    check_import_error(dir.write("huge_one_line.off", "OFF 900000000 1 0\n0 0 0\n"),
+                       "line 1: the header declares 900000000 vertices");
+  }
+  SECTION("a file over 1 GiB") {
+    // Sparse: no disk space is used.
+    const std::string path = dir.write("big.stl", "solid big\n");
+    fs::resize_file(path, ffd::kMaxMeshFileBytes + 1);
+    check_import_error(path, "the file has 1073741825 bytes, more than the limit of 1073741824 (1 GiB)");
+  }
+}
