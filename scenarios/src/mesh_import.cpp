@@ -165,42 +165,95 @@ void check_ply_header(const std::string& path, std::ifstream& file, std::uintmax
   fail(path, "cannot read the mesh: the PLY header has no end_header line");
 }
 
-// An OFF header's counts ("[ST][C][N][4][n]OFF", comments, "VERTICES FACES EDGES"): assimp
-// allocates them before reading the entries, each at least a byte of the file.
-void check_off_header(const std::string& path, std::ifstream& file, std::uintmax_t file_bytes) {
+// OFF is read here, not by assimp, whose OFF reader reads out of bounds on malformed faces:
+// an optional keyword line ("OFF", or with the prefixes ST, C, N for texture coordinates,
+// colours and normals on each vertex line, which are ignored), then "VERTICES FACES EDGES",
+// VERTICES lines "x y z ...", FACES lines "n i1 ... in ..." (indices from 0; polygons split
+// into fans from their first corner, points and lines skipped). '#' starts a comment.
+SurfaceMesh read_off(const std::string& path, std::uintmax_t file_bytes) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) fail(path, "cannot open the file");
   std::string line;
   std::size_t line_number = 0;
-  bool keyword_seen = false;
-  while (std::getline(file, line)) {
-    ++line_number;
-    const std::vector<std::string_view> tokens = tokens_of(trim(line));
-    if (tokens.empty() || tokens[0].starts_with('#')) continue;
-    std::size_t first = 0;
-    if (!keyword_seen && tokens[0].ends_with("OFF")) {
-      keyword_seen = true;
-      first = 1;
-      if (tokens.size() == 1) continue;
+  // The next line with something on it, as tokens; empty at the end of the file.
+  const auto next_tokens = [&]() {
+    while (std::getline(file, line)) {
+      ++line_number;
+      std::vector<std::string_view> tokens = tokens_of(trim(std::string_view(line).substr(0, line.find('#'))));
+      if (!tokens.empty()) return tokens;
     }
-    for (std::size_t k = first; k < tokens.size() && k < first + 2; ++k) {
-      std::uintmax_t count = 0;
-      const std::string_view text = tokens[k];
-      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), count);
-      if (end != text.data() + text.size() || (error != std::errc() && error != std::errc::result_out_of_range))
-        return;  // not a count: assimp reports it
-      if (error == std::errc::result_out_of_range || count > file_bytes)
-        fail(path, "line " + std::to_string(line_number) + ": the header declares " + std::string(text) +
-                       (k == first ? " vertices" : " faces") + ", more than a file of " +
-                       std::to_string(file_bytes) + " bytes holds");
-    }
-    return;
+    return std::vector<std::string_view>{};
+  };
+  const auto where = [&]() { return "line " + std::to_string(line_number) + ": "; };
+  const auto count = [&](std::string_view text, const std::string& what) {
+    std::uintmax_t n = 0;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), n);
+    if (error == std::errc::result_out_of_range || (error == std::errc() && end == text.data() + text.size() && n > file_bytes))
+      fail(path, where() + "the header declares " + std::string(text) + " " + what + ", more than a file of " +
+                     std::to_string(file_bytes) + " bytes holds");
+    if (error != std::errc() || end != text.data() + text.size())
+      fail(path, where() + "cannot read the count of " + what + " '" + std::string(text) + "'");
+    return static_cast<std::size_t>(n);
+  };
+
+  std::vector<std::string_view> tokens = next_tokens();
+  if (!tokens.empty() && tokens[0].ends_with("OFF")) {
+    const std::string_view prefix = tokens[0].substr(0, tokens[0].size() - 3);
+    if (prefix.find_first_not_of("STCN") != std::string_view::npos)
+      fail(path, where() + "unsupported OFF variant '" + std::string(tokens[0]) + "' (only 3D vertices are read)");
+    if (tokens.size() == 1) tokens = next_tokens();
+    else tokens.erase(tokens.begin());  // the counts may follow on the keyword's line
   }
+  if (tokens.size() < 2) fail(path, where() + "expected the counts 'VERTICES FACES EDGES'");
+  const std::size_t vertex_count = count(tokens[0], "vertices");
+  const std::size_t face_count = count(tokens[1], "faces");
+  if (vertex_count > kMaxMeshVertices)
+    fail(path, where() + std::to_string(vertex_count) + " vertices, more than the limit of " +
+                   std::to_string(kMaxMeshVertices));
+
+  SurfaceMesh mesh;
+  mesh.vertices.reserve(vertex_count);
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    tokens = next_tokens();
+    if (tokens.size() < 3) fail(path, where() + "expected vertex " + std::to_string(v) + " as x y z");
+    Vec3 position;
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string_view number = tokens[static_cast<std::size_t>(axis)];
+      const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), position[axis]);
+      if (error != std::errc() || end != number.data() + number.size())
+        fail(path, where() + "cannot read the vertex coordinate '" + std::string(number) + "'");
+    }
+    mesh.vertices.push_back(position);
+  }
+  std::vector<Index> corners;
+  for (std::size_t f = 0; f < face_count; ++f) {
+    tokens = next_tokens();
+    std::size_t n = 0;
+    const std::string_view head = tokens.empty() ? std::string_view() : tokens[0];
+    const auto [end, error] = std::from_chars(head.data(), head.data() + head.size(), n);
+    if (tokens.empty() || error != std::errc() || end != head.data() + head.size() || n == 0 || n > tokens.size() - 1)
+      fail(path, where() + "expected face " + std::to_string(f) + " as 'n i1 ... in'");
+    corners.clear();
+    for (std::size_t k = 1; k <= n; ++k) {
+      std::size_t index = 0;
+      const auto [index_end, index_error] = std::from_chars(tokens[k].data(), tokens[k].data() + tokens[k].size(), index);
+      if (index_error != std::errc() || index_end != tokens[k].data() + tokens[k].size() || index >= vertex_count)
+        fail(path, where() + "face " + std::to_string(f) + ": '" + std::string(tokens[k]) + "' is not a vertex index below " +
+                       std::to_string(vertex_count));
+      corners.push_back(static_cast<Index>(index));
+    }
+    if (mesh.triangles.size() + (n >= 3 ? n - 2 : 0) > kMaxMeshTriangles)
+      fail(path, where() + "more than the limit of " + std::to_string(kMaxMeshTriangles) + " triangles");
+    for (std::size_t k = 2; k < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k - 1], corners[k]});
+  }
+  if (mesh.triangles.empty()) fail(path, "the file has no triangles (only points, lines or nothing)");
+  return mesh;
 }
 
 void check_header(const std::string& path, const std::string& extension, std::uintmax_t file_bytes) {
-  if (extension != ".ply" && extension != ".off") return;
+  if (extension != ".ply") return;
   std::ifstream file(path, std::ios::binary);
   if (!file) fail(path, "cannot open the file");
-  if (extension == ".off") return check_off_header(path, file, file_bytes);
   // Without assimp's magic number ("ply" in any case) assimp rejects the file itself.
   std::string line;
   const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
@@ -278,6 +331,7 @@ SurfaceMesh import_mesh(const std::string& path) {
                    std::to_string(kMaxMeshFileBytes) + " (1 GiB)");
   }
   const std::string extension = lowercase_extension(path);
+  if (extension == ".off") return read_off(path, file_bytes);
   check_header(path, extension, file_bytes);
 
   // No clean-up steps: no JoinIdenticalVertices (it welds with its own epsilon and drops
