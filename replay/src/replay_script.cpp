@@ -42,7 +42,7 @@ const std::vector<std::string_view> kRecordKeys = {"hash_every"};
 constexpr Bounds kPositive{0.0, kInf, true, false};
 constexpr Bounds kNonNegative{0.0, kInf, false, false};
 constexpr Bounds kUnit{0.0, 1.0, false, false};
-constexpr std::int64_t kMaxSteps = std::int64_t{1} << 40;
+constexpr std::int64_t kMaxSteps = kMaxReplaySteps;
 
 std::string location(const std::string& origin, const toml::source_region& where) {
   return origin + ":" + std::to_string(where.begin.line) + ":" + std::to_string(where.begin.column);
@@ -50,7 +50,8 @@ std::string location(const std::string& origin, const toml::source_region& where
 
 class ScriptReader {
  public:
-  ScriptReader(const std::string& origin, const std::string& base_dir) : origin_(origin), base_dir_(base_dir) {}
+  ScriptReader(const std::string& origin, const std::string& base_dir, const SceneLimits& limits)
+      : origin_(origin), base_dir_(base_dir), limits_(limits) {}
 
   LoadedReplay read(const toml::table& root_table) {
     const TableReader root(origin_, root_table, "", kRootKeys);
@@ -104,7 +105,7 @@ class ScriptReader {
     if (!node) root.fail_missing("scene", " (a scene file path, or an inline [scene] table)");
     if (const toml::table* inline_scene = node->as_table()) {
       script.scene_origin = origin_;
-      script.scene = read_scene_table(*inline_scene, origin_, base_dir_);
+      script.scene = read_scene_table(*inline_scene, origin_, base_dir_, limits_);
       script.scene.name = std::filesystem::path(origin_).stem().string();
       return;
     }
@@ -118,7 +119,7 @@ class ScriptReader {
       root.fail_at("scene", "cannot find scene file " + in_quotes(resolved.string()) +
                                 " (scene paths are relative to the script's folder)");
     script.scene_origin = resolved.string();
-    script.scene = load_scene_file(resolved.string());
+    script.scene = load_scene_file(resolved.string(), limits_);
   }
 
   // A time given as "<prefix>_step" or "<prefix>_ms" (exactly one), in steps.
@@ -143,7 +144,9 @@ class ScriptReader {
   std::uint64_t ms_to_steps(const TableReader& t, const std::string& key, const Bounds& bounds) const {
     const double ms = t.number(key, 0.0, bounds);
     const double steps = std::round(ms / dt_ms_);
-    if (steps > static_cast<double>(kMaxSteps)) t.fail_at(key, "is too large");
+    if (steps > static_cast<double>(kMaxSteps))
+      t.fail_at(key, "is " + format_number(steps) + " steps of " + format_number(dt_ms_) +
+                         " ms, more than the limit of " + std::to_string(kMaxSteps) + " steps");
     return static_cast<std::uint64_t>(steps);
   }
 
@@ -320,6 +323,11 @@ class ScriptReader {
           t.fail_here(path, "overlaps " + std::string(key) + "[" + std::to_string(q) + "] (steps " +
                                 std::to_string(spans[q].first) + " to " + std::to_string(spans[q].second) + ")");
       spans.push_back(span);
+      path_commands_ += span.second - span.first + 1;
+      if (path_commands_ > kMaxPathCommands)
+        t.fail_here(path, "the paths so far span " + std::to_string(path_commands_) +
+                              " steps, more than the limit of " + std::to_string(kMaxPathCommands) +
+                              " (one command per step) in a script");
       std::size_t segment = 0;
       for (std::uint64_t s = span.first; s <= span.second; ++s) {
         while (segment + 1 < keys.size() && keys[segment + 1].first <= s) ++segment;
@@ -502,19 +510,23 @@ class ScriptReader {
 
   const std::string& origin_;
   const std::string& base_dir_;
+  const SceneLimits& limits_;
   const Model* model_ = nullptr;
+  std::uint64_t path_commands_ = 0;  // commands from the keyframed paths so far
   double dt_ms_ = 1.0;
   std::uint64_t steps_ = 0;
 };
 
 }  // namespace
 
-LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir) {
-  return ScriptReader(origin, base_dir).read(parse_toml(text, origin));
+LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
+                          const SceneLimits& limits) {
+  return ScriptReader(origin, base_dir, limits).read(parse_toml(text, origin));
 }
 
-LoadedReplay load_replay_file(const std::string& path) {
-  return parse_replay(read_text_file(path, "replay script"), path, std::filesystem::path(path).parent_path().string());
+LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits) {
+  return parse_replay(read_text_file(path, "replay script"), path, std::filesystem::path(path).parent_path().string(),
+                      limits);
 }
 
 }  // namespace ffd

@@ -110,6 +110,212 @@ SurfaceMesh read_obj_indexing(const std::string& path) {
   return mesh;
 }
 
+// The header of a PLY file, read strictly before assimp sees it: assimp's reader trusts it,
+// reading past the end of its buffer on a malformed one and looping for ever without
+// end_header, and allocates the entries its element lines declare before reading them (each
+// takes at least a byte of the file, so more than the file's size is a lie).
+void check_ply_header(const std::string& path, std::ifstream& file, std::uintmax_t file_bytes) {
+  static const std::vector<std::string_view> kTypes = {"char",  "uchar",  "short", "ushort",  "int",
+                                                       "uint",  "float",  "double", "int8",   "uint8",
+                                                       "int16", "uint16", "int32", "uint32",  "float32",
+                                                       "float64"};
+  static const std::vector<std::string_view> kFormats = {"ascii", "binary_little_endian", "binary_big_endian"};
+  const auto is_type = [](std::string_view t) { return std::find(kTypes.begin(), kTypes.end(), t) != kTypes.end(); };
+  std::string line;
+  std::size_t line_number = 1;  // the magic number's line was read
+  bool format_seen = false, element_seen = false;
+  constexpr std::size_t kMaxHeaderLine = 4096;
+  while (std::getline(file, line)) {
+    ++line_number;
+    const std::string where = "line " + std::to_string(line_number) + " of the PLY header: ";
+    if (line.size() > kMaxHeaderLine) fail(path, where + "the line is too long");
+    const std::vector<std::string_view> tokens = tokens_of(trim(line));
+    if (tokens.empty() || tokens[0] == "comment" || tokens[0] == "obj_info") continue;
+    if (tokens[0] == "end_header") {
+      if (tokens.size() != 1 || !format_seen) fail(path, where + "end_header before a format line, or with words after it");
+      return;
+    }
+    if (tokens[0] == "format") {
+      if (tokens.size() != 3 || format_seen ||
+          std::find(kFormats.begin(), kFormats.end(), tokens[1]) == kFormats.end())
+        fail(path, where + "expected one 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      format_seen = true;
+    } else if (tokens[0] == "element") {
+      if (tokens.size() != 3) fail(path, where + "expected 'element NAME COUNT'");
+      std::uintmax_t count = 0;
+      const std::string_view text = tokens[2];
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), count);
+      if (end != text.data() + text.size() || (error != std::errc() && error != std::errc::result_out_of_range))
+        fail(path, where + "the count of element '" + std::string(tokens[1]) + "' is not a whole number");
+      if (error == std::errc::result_out_of_range || count > file_bytes)
+        fail(path, where + "element '" + std::string(tokens[1]) + "' declares " + std::string(text) +
+                       " entries, more than a file of " + std::to_string(file_bytes) + " bytes holds");
+      element_seen = true;
+    } else if (tokens[0] == "property") {
+      const bool list = tokens.size() == 5 && tokens[1] == "list" && is_type(tokens[2]) && is_type(tokens[3]) &&
+                        tokens[2] != "float" && tokens[2] != "double" && tokens[2] != "float32" &&
+                        tokens[2] != "float64";
+      const bool scalar = tokens.size() == 3 && is_type(tokens[1]);
+      if (!element_seen || !(list || scalar))
+        fail(path, where + "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' after an element");
+    } else {
+      fail(path, where + "unknown header line '" + std::string(tokens[0]) + "'");
+    }
+  }
+  fail(path, "cannot read the mesh: the PLY header has no end_header line");
+}
+
+// OFF is read here, not by assimp, whose OFF reader reads out of bounds on malformed faces:
+// an optional keyword line ("OFF", or with the prefixes ST, C, N for texture coordinates,
+// colours and normals on each vertex line, which are ignored), then "VERTICES FACES EDGES",
+// VERTICES lines "x y z ...", FACES lines "n i1 ... in ..." (indices from 0; polygons split
+// into fans from their first corner, points and lines skipped). '#' starts a comment.
+SurfaceMesh read_off(const std::string& path, std::uintmax_t file_bytes) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) fail(path, "cannot open the file");
+  std::string line;
+  std::size_t line_number = 0;
+  // The next line with something on it, as tokens; empty at the end of the file.
+  const auto next_tokens = [&]() {
+    while (std::getline(file, line)) {
+      ++line_number;
+      std::vector<std::string_view> tokens = tokens_of(trim(std::string_view(line).substr(0, line.find('#'))));
+      if (!tokens.empty()) return tokens;
+    }
+    return std::vector<std::string_view>{};
+  };
+  const auto where = [&]() { return "line " + std::to_string(line_number) + ": "; };
+  const auto count = [&](std::string_view text, const std::string& what) {
+    std::uintmax_t n = 0;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), n);
+    if (error == std::errc::result_out_of_range || (error == std::errc() && end == text.data() + text.size() && n > file_bytes))
+      fail(path, where() + "the header declares " + std::string(text) + " " + what + ", more than a file of " +
+                     std::to_string(file_bytes) + " bytes holds");
+    if (error != std::errc() || end != text.data() + text.size())
+      fail(path, where() + "cannot read the count of " + what + " '" + std::string(text) + "'");
+    return static_cast<std::size_t>(n);
+  };
+
+  std::vector<std::string_view> tokens = next_tokens();
+  if (!tokens.empty() && tokens[0].ends_with("OFF")) {
+    const std::string_view prefix = tokens[0].substr(0, tokens[0].size() - 3);
+    if (prefix.find_first_not_of("STCN") != std::string_view::npos)
+      fail(path, where() + "unsupported OFF variant '" + std::string(tokens[0]) + "' (only 3D vertices are read)");
+    if (tokens.size() == 1) tokens = next_tokens();
+    else tokens.erase(tokens.begin());  // the counts may follow on the keyword's line
+  }
+  if (tokens.size() < 2) fail(path, where() + "expected the counts 'VERTICES FACES EDGES'");
+  const std::size_t vertex_count = count(tokens[0], "vertices");
+  const std::size_t face_count = count(tokens[1], "faces");
+  if (vertex_count > kMaxMeshVertices)
+    fail(path, where() + std::to_string(vertex_count) + " vertices, more than the limit of " +
+                   std::to_string(kMaxMeshVertices));
+
+  SurfaceMesh mesh;
+  mesh.vertices.reserve(vertex_count);
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    tokens = next_tokens();
+    if (tokens.size() < 3) fail(path, where() + "expected vertex " + std::to_string(v) + " as x y z");
+    Vec3 position;
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string_view number = tokens[static_cast<std::size_t>(axis)];
+      const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), position[axis]);
+      if (error != std::errc() || end != number.data() + number.size())
+        fail(path, where() + "cannot read the vertex coordinate '" + std::string(number) + "'");
+    }
+    mesh.vertices.push_back(position);
+  }
+  std::vector<Index> corners;
+  for (std::size_t f = 0; f < face_count; ++f) {
+    tokens = next_tokens();
+    std::size_t n = 0;
+    const std::string_view head = tokens.empty() ? std::string_view() : tokens[0];
+    const auto [end, error] = std::from_chars(head.data(), head.data() + head.size(), n);
+    if (tokens.empty() || error != std::errc() || end != head.data() + head.size() || n == 0 || n > tokens.size() - 1)
+      fail(path, where() + "expected face " + std::to_string(f) + " as 'n i1 ... in'");
+    corners.clear();
+    for (std::size_t k = 1; k <= n; ++k) {
+      std::size_t index = 0;
+      const auto [index_end, index_error] = std::from_chars(tokens[k].data(), tokens[k].data() + tokens[k].size(), index);
+      if (index_error != std::errc() || index_end != tokens[k].data() + tokens[k].size() || index >= vertex_count)
+        fail(path, where() + "face " + std::to_string(f) + ": '" + std::string(tokens[k]) + "' is not a vertex index below " +
+                       std::to_string(vertex_count));
+      corners.push_back(static_cast<Index>(index));
+    }
+    if (mesh.triangles.size() + (n >= 3 ? n - 2 : 0) > kMaxMeshTriangles)
+      fail(path, where() + "more than the limit of " + std::to_string(kMaxMeshTriangles) + " triangles");
+    for (std::size_t k = 2; k < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k - 1], corners[k]});
+  }
+  if (mesh.triangles.empty()) fail(path, "the file has no triangles (only points, lines or nothing)");
+  return mesh;
+}
+
+void check_header(const std::string& path, const std::string& extension, std::uintmax_t file_bytes) {
+  if (extension != ".ply") return;
+  std::ifstream file(path, std::ios::binary);
+  if (!file) fail(path, "cannot open the file");
+  // Without assimp's magic number ("ply" in any case) assimp rejects the file itself.
+  std::string line;
+  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  if (std::getline(file, line) && line.size() >= 3 && lower(line[0]) == 'p' && lower(line[1]) == 'l' &&
+      lower(line[2]) == 'y')
+    check_ply_header(path, file, file_bytes);
+}
+
+// What assimp's post-processing relies on, checked on the reader's output; each mesh's
+// primitive types are set from its faces (a reader may claim polygons it did not make). Also
+// the size limits, with polygons counted as the triangles they become.
+void check_structure(const std::string& path, const aiScene& scene) {
+  if (scene.mNumMeshes > 0 && scene.mMeshes == nullptr) fail(path, "cannot read the mesh: no mesh data");
+  std::size_t vertex_total = 0, triangle_total = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    aiMesh* part = scene.mMeshes[m];
+    if (part == nullptr || (part->mNumVertices > 0 && part->mVertices == nullptr) ||
+        (part->mNumFaces > 0 && part->mFaces == nullptr))
+      fail(path, "cannot read the mesh: mesh " + std::to_string(m) + " lacks its vertices or faces");
+    vertex_total += part->mNumVertices;
+    unsigned types = 0;
+    for (unsigned f = 0; f < part->mNumFaces; ++f) {
+      const aiFace& face = part->mFaces[f];
+      if (face.mNumIndices == 0 || face.mIndices == nullptr)
+        fail(path, "face " + std::to_string(f) + " of mesh " + std::to_string(m) + " has no corners");
+      for (unsigned k = 0; k < face.mNumIndices; ++k) {
+        if (face.mIndices[k] >= part->mNumVertices)
+          fail(path, "face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[k]) +
+                         " of a mesh with " + std::to_string(part->mNumVertices) + " vertices");
+      }
+      types |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
+               : face.mNumIndices == 2 ? aiPrimitiveType_LINE
+               : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                       : aiPrimitiveType_POLYGON;
+      triangle_total += face.mNumIndices >= 3 ? face.mNumIndices - 2 : 0;
+    }
+    part->mPrimitiveTypes = types;
+  }
+  if (vertex_total > kMaxMeshVertices)
+    fail(path, "the file has " + std::to_string(vertex_total) + " vertices, more than the limit of " +
+                   std::to_string(kMaxMeshVertices));
+  if (triangle_total > kMaxMeshTriangles)
+    fail(path, "the file has " + std::to_string(triangle_total) + " triangles, more than the limit of " +
+                   std::to_string(kMaxMeshTriangles));
+  // Pre-transforming walks the node graph: every mesh a node names must exist.
+  std::vector<const aiNode*> nodes;
+  if (scene.mRootNode != nullptr) nodes.push_back(scene.mRootNode);
+  for (std::size_t visited = 0; !nodes.empty(); ++visited) {
+    if (visited > kMaxMeshVertices) fail(path, "cannot read the mesh: its node graph does not end");
+    const aiNode* node = nodes.back();
+    nodes.pop_back();
+    for (unsigned i = 0; i < node->mNumMeshes; ++i)
+      if (node->mMeshes == nullptr || node->mMeshes[i] >= scene.mNumMeshes)
+        fail(path, "cannot read the mesh: a node names a mesh that does not exist");
+    for (unsigned i = 0; i < node->mNumChildren; ++i) {
+      if (node->mChildren == nullptr || node->mChildren[i] == nullptr)
+        fail(path, "cannot read the mesh: a node has a missing child");
+      nodes.push_back(node->mChildren[i]);
+    }
+  }
+}
+
 }  // namespace
 
 SurfaceMesh import_mesh(const std::string& path) {
@@ -117,12 +323,27 @@ SurfaceMesh import_mesh(const std::string& path) {
   const auto status = std::filesystem::status(path, status_error);
   if (!std::filesystem::exists(status)) fail(path, "file not found");
   if (!std::filesystem::is_regular_file(status)) fail(path, "not a regular file");
+  std::error_code size_error;
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path, size_error);
+  if (size_error) fail(path, "cannot read the file size: " + size_error.message());
+  if (file_bytes > kMaxMeshFileBytes) {
+    fail(path, "the file has " + std::to_string(file_bytes) + " bytes, more than the limit of " +
+                   std::to_string(kMaxMeshFileBytes) + " (1 GiB)");
+  }
+  const std::string extension = lowercase_extension(path);
+  if (extension == ".off") return read_off(path, file_bytes);
+  check_header(path, extension, file_bytes);
 
   // No clean-up steps: no JoinIdenticalVertices (it welds with its own epsilon and drops
   // unreferenced vertices), no FindDegenerates, no validation fixes. clean_mesh() does the
-  // clean-up and reports it.
+  // clean-up and reports it. The file is read without post-processing first: assimp's steps
+  // trust what its readers made (a face's indices, a mesh's primitive types) and abort or
+  // read out of bounds where a malformed file made it wrong, so that is checked in between.
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  const aiScene* scene = importer.ReadFile(path, 0);
+  if (scene == nullptr) fail(path, std::string("cannot read the mesh: ") + importer.GetErrorString());
+  check_structure(path, *scene);
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices);
   if (scene == nullptr) fail(path, std::string("cannot read the mesh: ") + importer.GetErrorString());
 
   SurfaceMesh mesh;
@@ -151,7 +372,7 @@ SurfaceMesh import_mesh(const std::string& path) {
   }
   if (mesh.triangles.empty()) fail(path, "the file has no triangles (only points, lines or nothing)");
 
-  if (lowercase_extension(path) == ".obj") {
+  if (extension == ".obj") {
     SurfaceMesh indexed = read_obj_indexing(path);
     // Both readers must see the same faces; a mismatch means an OBJ feature the record
     // reader does not know, and its indexing would be wrong.

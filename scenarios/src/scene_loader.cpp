@@ -64,8 +64,8 @@ std::vector<std::string_view> all_effect_names() {
 
 class SceneReader {
  public:
-  SceneReader(const std::string& origin, const std::string& base_dir)
-      : origin_(origin), base_dir_(base_dir) {}
+  SceneReader(const std::string& origin, const std::string& base_dir, const SceneLimits& limits)
+      : origin_(origin), base_dir_(base_dir), limits_(limits) {}
 
   SceneSpec read(const toml::table& root_table) {
     const TableReader root(origin_, root_table, "", kRootKeys, [](std::string_view key) -> std::string {
@@ -94,6 +94,10 @@ class SceneReader {
     const auto groups = array_of_tables(root, "group");
     if (objects.empty() && groups.empty())
       root.fail_here("object", "a scene needs at least one [[object]] or [[group]] table");
+    if (objects.size() > limits_.objects) {
+      root.fail(objects[limits_.objects]->source(), "object[" + std::to_string(limits_.objects) + "]",
+                "the scene has more than " + std::to_string(limits_.objects) + " objects (the limit)");
+    }
     for (std::size_t i = 0; i < objects.size(); ++i) scene.objects.push_back(read_object(*objects[i], i));
     for (std::size_t i = 0; i < groups.size(); ++i) read_group(*groups[i], i, scene);
     return scene;
@@ -218,6 +222,7 @@ class SceneReader {
       object.fail_at("glyph", "an [[object]]'s glyph.text is one character (a [[group]] cycles through several)");
     spec.mesh = read_surface(object, spec.source, 0);
     scale_mesh(scale, spec.mesh);
+    charge(object, spec, 1);
     return spec;
   }
 
@@ -233,8 +238,13 @@ class SceneReader {
     const TableReader group(origin_, table, path, keys, misplaced_object_key);
     const auto name = group.string("name");
     if (!name) group.fail_missing("name");
-    const std::size_t count = static_cast<std::size_t>(group.integer("count", 0, 1, 100'000));
+    const std::size_t count = static_cast<std::size_t>(group.integer("count", 0, 1, static_cast<std::int64_t>(limits_.objects)));
     if (!group.has("count")) group.fail_missing("count", " (how many objects the group makes)");
+    if (count > limits_.objects - std::min(limits_.objects, scene.objects.size())) {
+      group.fail_at("count", std::to_string(count) + " objects would make " +
+                                 std::to_string(scene.objects.size() + count) + " in the scene; the limit is " +
+                                 std::to_string(limits_.objects) + " per scene");
+    }
 
     const toml::table* layout_table = group.subtable("layout");
     if (!layout_table) group.fail_missing("layout", " ([" + path + ".layout] with grid, spacing and centre)");
@@ -246,9 +256,10 @@ class SceneReader {
       if (grid_numbers[a] != std::floor(grid_numbers[a])) layout.fail_at("grid", "expected whole numbers");
       grid[a] = static_cast<int>(grid_numbers[a]);
     }
-    if (static_cast<double>(grid.x()) * grid.y() * grid.z() < static_cast<double>(count)) {
-      layout.fail_at("grid", "holds " + std::to_string(grid.x() * grid.y() * grid.z()) + " places for " +
-                                 std::to_string(count) + " objects");
+    // 64-bit: up to 10^12 places.
+    const std::int64_t places = std::int64_t{grid.x()} * grid.y() * grid.z();
+    if (places < static_cast<std::int64_t>(count)) {
+      layout.fail_at("grid", "holds " + std::to_string(places) + " places for " + std::to_string(count) + " objects");
     }
     const Vec3 spacing = layout.vec3("spacing", Vec3::Zero(), kNonNegative);
     if (!layout.has("spacing")) layout.fail_missing("spacing", " ([dx, dy, dz] in m)");
@@ -272,6 +283,12 @@ class SceneReader {
     for (std::size_t i = 0; i < text.size(); ++i) {
       surfaces.push_back(read_surface(group, sources[i], i));
       scale_mesh(scale, surfaces.back());
+      // Character i is used by objects i, i + len(text), ... below `count`.
+      const std::size_t copies = i < count ? (count - i + text.size() - 1) / text.size() : 0;
+      ObjectSpec sized = base;
+      sized.mesh = std::move(surfaces.back());
+      charge(group, sized, copies);
+      surfaces.back() = std::move(sized.mesh);
     }
 
     // splitmix64 from the scene seed and the group index: the same numbers on every platform.
@@ -354,6 +371,11 @@ class SceneReader {
       out.push_back(code);
       i += static_cast<std::size_t>(length);
     }
+    // A group makes one mesh per character, up front.
+    if (out.size() > limits_.glyph_text) {
+      glyph.fail_at("text", "has " + std::to_string(out.size()) + " characters, more than the limit of " +
+                                std::to_string(limits_.glyph_text));
+    }
     return out;
   }
 
@@ -435,6 +457,13 @@ class SceneReader {
     options.em_size = glyph.required_number("em_size", kPositive, " (m: the font size)");
     options.depth = glyph.required_number("depth", kPositive, " (m: the extrusion)");
     options.sample_spacing = glyph.required_number("sample_spacing", kPositive, " (m between outline samples)");
+    // The outline's samples (and so the time to mesh it) grow with em_size / sample_spacing.
+    const double samples_per_em = options.em_size / options.sample_spacing;
+    if (samples_per_em > limits_.glyph_samples_per_em) {
+      glyph.fail_at("sample_spacing", "em_size / sample_spacing is " + format_number(samples_per_em) +
+                                          ", more than the limit of " + format_number(limits_.glyph_samples_per_em) +
+                                          "; use a larger sample_spacing");
+    }
     const auto key = std::make_tuple(options.font_path, options.character, options.em_size, options.depth,
                                      options.sample_spacing);
     source = options.font_path + " U+" + hex_code(options.character);
@@ -500,6 +529,115 @@ class SceneReader {
     }
   }
 
+  // Counts `copies` objects of `spec`'s (scaled) surface against the limits before compile()
+  // builds them, with the numbers compile() will meet: triangles after subdivision, cells of
+  // the regular lattice grid over the bounds of the vertices the triangles use (compile()
+  // drops stray pieces first, so it may use fewer), the triangle-cell pairs the lattice
+  // builder clips (each triangle against every cell of its bounding box, 4^subdivide times
+  // for the finer triangles inside it), and shape-matching region members.
+  void charge(const TableReader& object, const ObjectSpec& spec, std::size_t copies) {
+    const std::string_view surface_key = object.has("mesh") ? "mesh" : object.has("glyph") ? "glyph" : "shape";
+    const std::string_view cell_key = object.has("cell_size") ? "cell_size" : surface_key;
+    const double refinement = std::pow(4.0, spec.subdivisions);
+    const double triangles = static_cast<double>(spec.mesh.triangles.size()) * refinement;
+    if (triangles > static_cast<double>(limits_.object_triangles)) {
+      const bool subdivided = spec.subdivisions > 0;
+      object.fail_at(subdivided ? "subdivide" : surface_key,
+                     "the surface has " + format_number(triangles) + " triangles" +
+                         (subdivided ? " after subdivision (" + std::to_string(spec.mesh.triangles.size()) +
+                                           " before)"
+                                     : "") +
+                         ", more than the limit of " + std::to_string(limits_.object_triangles) + " per object");
+    }
+    // Bad indices and non-finite vertices are left to clean_mesh(), which reports them.
+    const auto usable = [&](const std::array<Index, 3>& triangle) {
+      for (const Index v : triangle)
+        if (v >= spec.mesh.vertices.size() || !is_finite(spec.mesh.vertices[v])) return false;
+      return true;
+    };
+    Vec3 lo = Vec3::Constant(kInf), hi = Vec3::Constant(-kInf);
+    bool any = false;
+    for (const auto& triangle : spec.mesh.triangles) {
+      if (!usable(triangle)) continue;
+      for (const Index v : triangle) {
+        lo = lo.cwiseMin(spec.mesh.vertices[v]);
+        hi = hi.cwiseMax(spec.mesh.vertices[v]);
+      }
+      any = true;
+    }
+    if (!any) return;  // compile() reports a surface without triangles
+    // Computed so that no value overflows, even for extreme coordinates and cell sizes (the
+    // tests trap floating-point overflow): half extents, and an axis past the limit is +inf.
+    const double h = spec.cell_size;
+    const double cap = static_cast<double>(limits_.object_lattice_cells);
+    const double largest = std::numeric_limits<double>::max();
+    Vec3 half, dims;
+    for (int a = 0; a < 3; ++a) {
+      half[a] = 0.5 * hi[a] - 0.5 * lo[a];
+      dims[a] = h <= largest / cap && half[a] > 0.5 * cap * h ? kInf : std::floor(2.0 * (half[a] / h)) + 1.0;
+    }
+    const double cells = dims.prod();
+    if (!(cells <= cap)) {
+      const auto extent = [&](int a) { return half[a] <= 0.5 * largest ? format_number(2.0 * half[a]) : "inf"; };
+      object.fail_at(object.has("cell_size") ? "cell_size" : object.has("scale") ? "scale" : surface_key,
+                     "cell_size " + format_number(h) + " m over a surface of " + extent(0) + " x " + extent(1) +
+                         " x " + extent(2) + " m makes a lattice of " +
+                         (cells < kInf ? "up to " + format_number(cells) + " cells, more than" : "more cells than") +
+                         " the limit of " + std::to_string(limits_.object_lattice_cells) +
+                         " per object; use a larger cell_size");
+    }
+    // The grid as build_lattice() places it: centred on the bounds.
+    const Vec3 origin = 0.5 * lo + 0.5 * hi - (0.5 * h) * dims;
+    double pairs = 0.0;
+    for (const auto& triangle : spec.mesh.triangles) {
+      if (!usable(triangle)) continue;
+      double span = 1.0;
+      for (int a = 0; a < 3; ++a) {
+        double first = kInf, last = -kInf;
+        for (const Index v : triangle) {
+          const double g = std::floor((spec.mesh.vertices[v][a] - origin[a]) / h);
+          first = std::min(first, g);
+          last = std::max(last, g);
+        }
+        span *= std::clamp(last, 0.0, dims[a] - 1.0) - std::clamp(first, 0.0, dims[a] - 1.0) + 1.0;
+      }
+      pairs += span;
+    }
+    pairs *= refinement;
+    const double nodes = (dims + Vec3::Ones()).prod();
+    const double region_width = 2.0 * spec.shape_matching.region_half_width + 1.0;
+    const double members =
+        spec.dynamics == DynamicsKind::ShapeMatching ? nodes * region_width * region_width * region_width : 0.0;
+
+    const double n = static_cast<double>(copies);
+    triangles_ += triangles * n;
+    lattice_cells_ += cells * n;
+    triangle_cells_ += pairs * n;
+    region_members_ += members * n;
+    if (triangles_ > static_cast<double>(limits_.scene_triangles)) {
+      object.fail_at(surface_key, "the scene's objects have " + format_number(triangles_) +
+                                      " triangles so far, more than the limit of " +
+                                      std::to_string(limits_.scene_triangles) + " per scene");
+    }
+    if (lattice_cells_ > static_cast<double>(limits_.scene_lattice_cells)) {
+      object.fail_at(cell_key, "the scene's objects have lattices of up to " + format_number(lattice_cells_) +
+                                   " cells so far, more than the limit of " +
+                                   std::to_string(limits_.scene_lattice_cells) + " per scene; use a larger cell_size");
+    }
+    if (triangle_cells_ > static_cast<double>(limits_.scene_triangle_cells)) {
+      object.fail_at(cell_key, "building the lattices means clipping " + format_number(triangle_cells_) +
+                                   " triangle-cell pairs so far (each triangle against every cell of its bounding "
+                                   "box), more than the limit of " + std::to_string(limits_.scene_triangle_cells) +
+                                   " per scene; use a larger cell_size");
+    }
+    if (region_members_ > static_cast<double>(limits_.scene_region_members)) {
+      object.fail_at("shape_matching", "shape-matching regions of up to " + format_number(region_members_) +
+                                           " lattice nodes in all so far (each node's region spans (2w+1)^3), more "
+                                           "than the limit of " + std::to_string(limits_.scene_region_members) +
+                                           " per scene; use a smaller region_half_width or a larger cell_size");
+    }
+  }
+
   // `seen` maps each name to the table that declared it ("object[2]", "group[0]").
   void check_unique(const TableReader& table, const std::string& name,
                     std::map<std::string, std::string>& seen) const {
@@ -513,6 +651,9 @@ class SceneReader {
 
   const std::string& origin_;
   const std::string& base_dir_;
+  const SceneLimits& limits_;
+  // Charged so far (see charge()).
+  double triangles_ = 0.0, lattice_cells_ = 0.0, triangle_cells_ = 0.0, region_members_ = 0.0;
   std::map<std::string, std::string> object_names_;
   std::map<std::string, std::string> plane_names_;
   std::map<std::tuple<std::string, char32_t, double, double, double>, SurfaceMesh> glyphs_;
@@ -520,16 +661,19 @@ class SceneReader {
 
 }  // namespace
 
-SceneSpec parse_scene(const std::string& text, const std::string& origin, const std::string& base_dir) {
-  return read_scene_table(parse_toml(text, origin), origin, base_dir);
+SceneSpec parse_scene(const std::string& text, const std::string& origin, const std::string& base_dir,
+                      const SceneLimits& limits) {
+  return read_scene_table(parse_toml(text, origin), origin, base_dir, limits);
 }
 
-SceneSpec read_scene_table(const toml::table& table, const std::string& origin, const std::string& base_dir) {
-  return SceneReader(origin, base_dir).read(table);
+SceneSpec read_scene_table(const toml::table& table, const std::string& origin, const std::string& base_dir,
+                           const SceneLimits& limits) {
+  return SceneReader(origin, base_dir, limits).read(table);
 }
 
-SceneSpec load_scene_file(const std::string& path) {
-  return parse_scene(read_text_file(path, "scene file"), path, std::filesystem::path(path).parent_path().string());
+SceneSpec load_scene_file(const std::string& path, const SceneLimits& limits) {
+  return parse_scene(read_text_file(path, "scene file"), path, std::filesystem::path(path).parent_path().string(),
+                     limits);
 }
 
 std::string default_scene_path() { return FFDSIM_SCENARIO_DIR "/scenes/two_teapots.toml"; }

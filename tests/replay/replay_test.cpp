@@ -118,6 +118,38 @@ TEST_CASE("Replay scripts: malformed scripts name the file, line, column and fie
   }
 }
 
+TEST_CASE("Replay scripts: a run longer than the step limit is an error naming the limit") {
+  const std::string head = "version = 1\nscene = \"" + kScene + "\"\n";
+  REQUIRE_THROWS_AS(parse(head + "steps = 100000001\n"), ReplayError);
+  REQUIRE_THROWS_WITH(parse(head + "steps = 100000001\n"),
+                      StartsWith("test.toml:3:9: steps: must be in [1, 100000000] (got 100000001)"));
+  // 10^12 ms at dt = 1 ms.
+  REQUIRE_THROWS_WITH(parse(head + "duration_ms = 1e12\n"),
+                      StartsWith("test.toml:3:15: duration_ms: is 1e+12 steps of 1 ms, more than the limit "
+                                 "of 100000000 steps"));
+  REQUIRE_THROWS_WITH(parse(head + "steps = 10\n[[event]]\nat_ms = 1e300\nalpha = 0.5\n"),
+                      StartsWith("test.toml:5:9: event[0].at_ms: is 1e+300 steps of 1 ms, more than the limit"));
+}
+
+TEST_CASE("Replay scripts: keyframed paths over the command limit are an error naming the limit") {
+  // Each path is one command per step it spans: 400,001 (probe paths are read first) + 600,001.
+  const std::string paths =
+      "[[drag_path]]\nkeyframes = [ { at_step = 0, position = [0, 0, 0] }, { at_step = 600000, position = [0, 1, 0] } ]\n"
+      "[[probe_path]]\nkeyframes = [ { at_step = 600001, position = [0, 0, 0] }, { at_step = 1000001, position = [0, 1, 0] } ]\n";
+  const std::string text = "version = 1\nscene = \"" + kScene + "\"\nsteps = 2000000\n" + paths;
+  REQUIRE_THROWS_AS(parse(text), ReplayError);
+  REQUIRE_THROWS_WITH(parse(text), StartsWith("test.toml:4:1: drag_path[0]: the paths so far span 1000002 steps, "
+                                              "more than the limit of 1000000 (one command per step) in a script"));
+}
+
+TEST_CASE("Replay scripts: the script's scene is read within the given scene limits") {
+  SceneLimits limits;
+  limits.objects = 1;  // the scene has two
+  const std::string text = "version = 1\nscene = \"" + kScene + "\"\nsteps = 5\n";
+  REQUIRE_THROWS_WITH(parse_replay(text, "test.toml", "", limits),
+                      Contains("object[1]: the scene has more than 1 objects (the limit)"));
+}
+
 TEST_CASE("Replay scripts: a missing file is named") {
   REQUIRE_THROWS_WITH(load_replay_file("/nonexistent/poke.toml"), StartsWith("/nonexistent/poke.toml: cannot open replay script"));
 }

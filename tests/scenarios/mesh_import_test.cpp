@@ -264,3 +264,80 @@ TEST_CASE("import_mesh reports unreadable files with the path and the reason", "
                        "refers to vertex 7 of a mesh with 3 vertices");
   }
 }
+
+TEST_CASE("import_mesh reads OFF with the file's vertex list and polygons as fans", "[mesh_import]") {
+  TempDir dir;
+  SECTION("a square and a triangle, comments, counts on the keyword's line") {
+    const SurfaceMesh mesh = ffd::import_mesh(dir.write("shapes.off",
+                                                        "OFF 5 3 0  # counts\n"
+                                                        "# a square, a point and a triangle\n"
+                                                        "0 0 0\n1 0 0\n1 1 0\n0 1 0\n\n0.5 0.5 1\n"
+                                                        "4 0 1 2 3\n1 4\n3 0 1 4\n"));
+    CHECK(mesh.vertices.size() == 5);
+    CHECK(mesh.vertices[4] == Vec3(0.5, 0.5, 1.0));
+    REQUIRE(mesh.triangles.size() == 3);
+    CHECK(mesh.triangles[0] == Triangle{0, 1, 2});
+    CHECK(mesh.triangles[1] == Triangle{0, 2, 3});
+    CHECK(mesh.triangles[2] == Triangle{0, 1, 4});
+  }
+  SECTION("COFF: colours after the coordinates and the corners are ignored") {
+    const SurfaceMesh mesh = ffd::import_mesh(
+        dir.write("coloured.off", "COFF\n3 1 3\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n"));
+    CHECK(mesh.vertices.size() == 3);
+    CHECK(mesh.triangles.size() == 1);
+  }
+  SECTION("errors name the line") {
+    check_import_error(dir.write("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
+                       "line 6: face 0: '3' is not a vertex index below 3");
+    check_import_error(dir.write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"), "line 4: expected vertex 2 as x y z");
+    check_import_error(dir.write("corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n"),
+                       "line 6: expected face 0 as 'n i1 ... in'");
+    check_import_error(dir.write("number.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"),
+                       "line 4: cannot read the vertex coordinate 'x'");
+    check_import_error(dir.write("4d.off", "4OFF\n3 1 0\n"), "line 1: unsupported OFF variant '4OFF'");
+    check_import_error(dir.write("lines.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), "no triangles");
+  }
+}
+
+TEST_CASE("import_mesh rejects files and headers over its limits before reading them", "[mesh_import]") {
+  TempDir dir;
+  const std::string ply_head = "ply\nformat ascii 1.0\nelement vertex ";
+  const std::string ply_tail = "\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
+  SECTION("a PLY header declaring more vertices than the file holds") {
+    const std::string text = ply_head + "4000000000" + ply_tail;
+    check_import_error(dir.write("huge.ply", text), "line 3 of the PLY header: element 'vertex' declares 4000000000 "
+                                                    "entries, more than a file of " +
+                                                        std::to_string(text.size()) + " bytes holds");
+  }
+  SECTION("a PLY count beyond 64 bits") {
+    check_import_error(dir.write("huger.ply", ply_head + "99999999999999999999999" + ply_tail),
+                       "element 'vertex' declares 99999999999999999999999 entries");
+  }
+  SECTION("a PLY header without its end") {
+    check_import_error(dir.write("endless.ply", ply_head + "4\nproperty float x\n"),
+                       "the PLY header has no end_header line");
+  }
+  SECTION("a PLY header with a line assimp would misread") {
+    check_import_error(dir.write("odd.ply", ply_head + "4\nproperty list float int vertex_indices\nend_header\n"),
+                       "line 4 of the PLY header: expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE "
+                       "NAME' after an element");
+    check_import_error(dir.write("unknown.ply", ply_head + "4\nproperty float x\nvertex 1 2 3\nend_header\n"),
+                       "line 5 of the PLY header: unknown header line 'vertex'");
+  }
+  SECTION("an OFF header declaring more faces than the file holds") {
+    const std::string text = "OFF\n# a comment\n3 2000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    check_import_error(dir.write("huge.off", text),
+                       "line 3: the header declares 2000000000 faces, more than a file of " +
+                           std::to_string(text.size()) + " bytes holds");
+  }
+  SECTION("an OFF header with its counts on the keyword line") {
+    check_import_error(dir.write("huge_one_line.off", "OFF 900000000 1 0\n0 0 0\n"),
+                       "line 1: the header declares 900000000 vertices");
+  }
+  SECTION("a file over 1 GiB") {
+    // Sparse: no disk space is used.
+    const std::string path = dir.write("big.stl", "solid big\n");
+    fs::resize_file(path, ffd::kMaxMeshFileBytes + 1);
+    check_import_error(path, "the file has 1073741825 bytes, more than the limit of 1073741824 (1 GiB)");
+  }
+}

@@ -700,7 +700,7 @@ TEST_CASE("group errors name the file and line and column and field", "[scene_lo
   }
   SECTION("count out of range") {
     require_error(scene_with_group(box_group(0, layout)),
-                  "inline.toml:10:9: group[0].count: must be in [1, 100000] (got 0)");
+                  "inline.toml:10:9: group[0].count: must be in [1, 10000] (got 0)");
   }
   SECTION("missing layout") {
     require_error(scene_with_group(kBoxGroupLines + "count = 2\n"),
@@ -1024,4 +1024,95 @@ TEST_CASE("subdivide out of range names the file and line and column and field",
   // In a group too.
   require_error(scene_with_group(box_group(2, "{ grid = [2, 1, 1], spacing = [1, 0, 0] }", "subdivide = 4\n")),
                 "inline.toml:12:13: group[0].subdivide: must be in [0, 3] (got 4)");
+}
+
+TEST_CASE("scene limits turn oversized scenes into errors naming the limit", "[scene_loader]") {
+  const auto box_object = [](const std::string& size, const std::string& cell_size, const std::string& extra = "") {
+    return scene_with_object("name = \"b\"\nshape = \"box\"\nsize = " + size + "\ncell_size = " + cell_size + "\n" +
+                             extra + "[object.mass_spring]\n");
+  };
+  const auto sphere_group = [](int count, int subdivide) {
+    return scene_with_group("name = \"s\"\nshape = \"sphere\"\nradius = 0.1\nsubdivisions = 6\nsubdivide = " +
+                            std::to_string(subdivide) + "\ncount = " + std::to_string(count) +
+                            "\nlayout = { grid = [10, 1, 1], spacing = [0.3, 0, 0] }\nmass_spring = {}\n");
+  };
+  SECTION("a lattice over the per-object limit") {
+    // 2^-7 m cells over 1 m: 129^3 = 2,146,689 cells.
+    require_error(box_object("[1.0, 1.0, 1.0]", "0.0078125"),
+                  "inline.toml:7:13: object[0].cell_size: cell_size 0.0078125 m over a surface of 1 x 1 x 1 m "
+                  "makes a lattice of up to 2146689 cells, more than the limit of 1000000 per object; use a larger "
+                  "cell_size");
+    REQUIRE_THROWS_WITH(parse(box_object("[1.0, 1.0, 1.0]", "1e-300")),
+                        Contains("object[0].cell_size: cell_size 1e-300 m over a surface of 1 x 1 x 1 m makes a "
+                                 "lattice of more cells than the limit of 1000000 per object"));
+  }
+  SECTION("lattices over the per-scene limit") {
+    // 2^-6 m cells over 1 m boxes: 65^3 = 274,625 cells each, 8 of them.
+    const std::string group = "name = \"g\"\nshape = \"box\"\nsize = [1, 1, 1]\ncell_size = 0.015625\ncount = 8\n"
+                              "layout = { grid = [8, 1, 1], spacing = [2, 0, 0] }\nmass_spring = {}\n";
+    require_error(scene_with_group(group),
+                  "inline.toml:8:13: group[0].cell_size: the scene's objects have lattices of up to 2197000 cells "
+                  "so far, more than the limit of 2000000 per scene; use a larger cell_size");
+  }
+  SECTION("triangles over the per-object limit after subdivision") {
+    // An icosphere of 6 subdivisions has 81,920 triangles; 3 more 1-to-4 rounds give 5,242,880.
+    require_error(sphere_group(1, 3),
+                  "inline.toml:9:13: group[0].subdivide: the surface has 5242880 triangles after subdivision (81920 "
+                  "before), more than the limit of 5000000 per object");
+  }
+  SECTION("triangles over the per-scene limit") {
+    // 8 objects of 1,310,720 triangles.
+    require_error(sphere_group(8, 2),
+                  "inline.toml:6:9: group[0].shape: the scene's objects have 10485760 triangles so far, more than "
+                  "the limit of 10000000 per scene");
+  }
+  SECTION("triangle-cell pairs over the per-scene limit") {
+    // 2^-3 m cells over a 1 m box: a 9^3 grid; each of the 12 triangles spans the 9 x 9 cells
+    // of its face.
+    ffd::SceneLimits limits;
+    limits.scene_triangle_cells = 900;
+    REQUIRE_THROWS_WITH(ffd::parse_scene(box_object("[1.0, 1.0, 1.0]", "0.125"), "inline.toml", kFixtureDir, limits),
+                        Equals("inline.toml:7:13: object[0].cell_size: building the lattices means clipping 972 "
+                               "triangle-cell pairs so far (each triangle against every cell of its bounding box), "
+                               "more than the limit of 900 per scene; use a larger cell_size"));
+  }
+  SECTION("shape-matching region members over the per-scene limit") {
+    // A 9^3 grid has 10^3 nodes, each with a region of 3^3 nodes.
+    ffd::SceneLimits limits;
+    limits.scene_region_members = 20'000;
+    const std::string text = scene_with_object("name = \"b\"\nshape = \"box\"\nsize = [1, 1, 1]\ncell_size = 0.125\n"
+                                               "[object.shape_matching]\nregion_half_width = 1\n");
+    REQUIRE_THROWS_WITH(ffd::parse_scene(text, "inline.toml", kFixtureDir, limits),
+                        Equals("inline.toml:8:1: object[0].shape_matching: shape-matching regions of up to 27000 "
+                               "lattice nodes in all so far (each node's region spans (2w+1)^3), more than the limit "
+                               "of 20000 per scene; use a smaller region_half_width or a larger cell_size"));
+  }
+  SECTION("more objects than the limit") {
+    require_error(scene_with_group(box_group(10001, "{ grid = [10001, 1, 1], spacing = [0.2, 0, 0] }")),
+                  "inline.toml:10:9: group[0].count: must be in [1, 10000] (got 10001)");
+    require_error(scene_with_object(kBoxLines) + "[[group]]\n" +
+                      box_group(10000, "{ grid = [10000, 1, 1], spacing = [0.2, 0, 0] }"),
+                  "inline.toml:16:9: group[0].count: 10000 objects would make 10001 in the scene; the limit is "
+                  "10000 per scene");
+    ffd::SceneLimits three;
+    three.objects = 3;
+    std::string four = scene_with_object(kBoxLines);
+    for (const char* name : {"c", "d", "e"}) four += "[[object]]\n" + std::string(kBoxLines).replace(8, 5, name);
+    REQUIRE_THROWS_WITH(ffd::parse_scene(four, "inline.toml", kFixtureDir, three),
+                        Equals("inline.toml:24:1: object[3]: the scene has more than 3 objects (the limit)"));
+  }
+  SECTION("a glyph text over the limit") {
+    require_error(scene_with_group("name = \"g\"\ncount = 2\n" + glyph_line(std::string(257, 'A')) +
+                                   "mass_spring = {}\nlayout = { grid = [2, 1, 1], spacing = [0.06, 0, 0] }\n"),
+                  "inline.toml:7:18: group[0].glyph.text: has 257 characters, more than the limit of 256");
+  }
+  SECTION("glyph samples per em over the limit") {
+    // 2^-4 m over 2^-16 m: 4,096 samples per em.
+    const std::string glyph = "glyph = { text = \"A\", font = \"" + kFont +
+                              "\", em_size = 0.0625, depth = 0.009, sample_spacing = 0.0000152587890625 }\n";
+    require_error(scene_with_object("name = \"a\"\n" + glyph + "[object.mass_spring]\n"),
+                  "inline.toml:5:" + std::to_string(glyph.find("0.0000152") + 1) +
+                      ": object[0].glyph.sample_spacing: em_size / sample_spacing is 4096, more than the limit of "
+                      "2000; use a larger sample_spacing");
+  }
 }

@@ -11,6 +11,7 @@
 
 #include "ffd/command.h"
 #include "ffd/model.h"
+#include "ffd/scene_loader.h"
 #include "ffd/toml_reader.h"
 
 namespace ffd {
@@ -18,6 +19,12 @@ namespace ffd {
 using ReplayError = InputError;
 
 inline constexpr int kReplayFormatVersion = 1;
+
+// Limits that keep a bad script from exhausting memory: the runner keeps a timing sample
+// per step (100,000,000 steps: 28 hours at dt = 1 ms), and a keyframed path is one command
+// per step it spans.
+inline constexpr std::int64_t kMaxReplaySteps = 100'000'000;
+inline constexpr std::uint64_t kMaxPathCommands = 1'000'000;  // all paths of a script together
 
 // Assertions. An unset optional is not checked.
 struct LatencyLimits {  // microseconds; lateness and misses only mean something in real time
@@ -115,7 +122,9 @@ struct LoadedReplay {
 // Reads, validates and resolves a script (object names, grab points, times in ms -> steps).
 // Throws ReplayError (file:line:col: field: problem) for anything wrong, including a scene
 // that does not load or compile.
-LoadedReplay load_replay_file(const std::string& path);
-LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir);
+// `limits` applies to the script's scene.
+LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits = {});
+LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
+                          const SceneLimits& limits = {});
 
 }  // namespace ffd
