@@ -53,10 +53,10 @@ TEST_CASE("Hard meshes: a single triangle and an open tube and a flat square com
   // Every FFD AABB of a flat surface is thickened (min_box_thickness, 0.1 of a cell), so
   // none is flat: its 8 corners span at least that much along every local axis.
   for (ffd::Index b = 0; b < model.box_count(); ++b) {
-    ffd::Vec3 low = model.box_local[b][0], high = low;
+    ffd::Vec3 low = model.boxes.box_local[b][0], high = low;
     for (int k = 1; k < 8; ++k) {
-      low = low.cwiseMin(model.box_local[b][k]);
-      high = high.cwiseMax(model.box_local[b][k]);
+      low = low.cwiseMin(model.boxes.box_local[b][k]);
+      high = high.cwiseMax(model.boxes.box_local[b][k]);
     }
     INFO("box " << b);
     CHECK((high - low).minCoeff() >= 0.1 - 1e-12);
