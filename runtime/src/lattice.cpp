@@ -42,6 +42,29 @@ int clip_polygon(const std::array<Vec3, 9>& in, int n, int axis, double bound, b
   return m;
 }
 
+// Adds a clipped piece of a triangle (n vertices, cell-local) to `acc`: bounds, area,
+// area-weighted centroid and normal. Returns false (and adds nothing) for a piece without
+// area.
+bool accumulate_piece(CellAccumulator& acc, const std::array<Vec3, 9>& poly, int n, const Vec3& tri_normal) {
+  Vec3 weighted = Vec3::Zero();
+  double twice_area = 0.0;
+  for (int v = 1; v + 1 < n; ++v) {
+    const double a2 = (poly[v] - poly[0]).cross(poly[v + 1] - poly[0]).norm();
+    twice_area += a2;
+    weighted += a2 * (poly[0] + poly[v] + poly[v + 1]) / 3.0;
+  }
+  if (!(twice_area > 1e-14)) return false;
+  acc.has_surface = true;
+  for (int v = 0; v < n; ++v) {
+    acc.lo = acc.lo.cwiseMin(poly[v]);
+    acc.hi = acc.hi.cwiseMax(poly[v]);
+  }
+  acc.area += twice_area;
+  acc.area_centroid += weighted;
+  acc.area_normal += tri_normal.normalized() * twice_area;
+  return true;
+}
+
 // Adds a clipped polygon (cell-local) to the accumulator of every part of the box
 // [box_lo, box_hi] split k x k x k that it overlaps; `parts` holds the k^3 accumulators,
 // x fastest. An axis along which the box is flat has all its surface in part 0.
@@ -73,24 +96,7 @@ void accumulate_parts(const std::array<Vec3, 9>& poly, int n, const Vec3& tri_no
           m = clip_polygon(a_buf, m, axis, below, false, b_buf);
           m = clip_polygon(b_buf, m, axis, above, true, a_buf);
         }
-        if (m < 3) continue;
-        double twice_area = 0.0;
-        Vec3 weighted = Vec3::Zero();
-        for (int v = 1; v + 1 < m; ++v) {
-          const double a2 = (a_buf[v] - a_buf[0]).cross(a_buf[v + 1] - a_buf[0]).norm();
-          twice_area += a2;
-          weighted += a2 * (a_buf[0] + a_buf[v] + a_buf[v + 1]) / 3.0;
-        }
-        if (!(twice_area > 1e-14)) continue;
-        CellAccumulator& acc = parts[x + k * (y + k * z)];
-        acc.has_surface = true;
-        for (int v = 0; v < m; ++v) {
-          acc.lo = acc.lo.cwiseMin(a_buf[v]);
-          acc.hi = acc.hi.cwiseMax(a_buf[v]);
-        }
-        acc.area += twice_area;
-        acc.area_centroid += weighted;
-        acc.area_normal += tri_normal.normalized() * twice_area;
+        if (m >= 3) accumulate_piece(parts[x + k * (y + k * z)], a_buf, m, tri_normal);
       }
 }
 
@@ -191,24 +197,8 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
   std::vector<CellAccumulator> acc(grid_cells);
   std::vector<std::pair<std::int64_t, Index>> pieces;  // (grid cell, triangle) with area
   for_each_piece([&](std::int64_t li, const std::array<Vec3, 9>& poly, int n, const Vec3& tri_normal, Index triangle) {
-    Vec3 weighted = Vec3::Zero();
-    double twice_area = 0.0;
-    for (int v = 1; v + 1 < n; ++v) {
-      const double a2 = (poly[v] - poly[0]).cross(poly[v + 1] - poly[0]).norm();
-      twice_area += a2;
-      weighted += a2 * (poly[0] + poly[v] + poly[v + 1]) / 3.0;
-    }
-    if (!(twice_area > 1e-14)) return;  // touches the cell at an edge or a point only
-    pieces.emplace_back(li, triangle);
-    CellAccumulator& cell = acc[li];
-    cell.has_surface = true;
-    for (int v = 0; v < n; ++v) {
-      cell.lo = cell.lo.cwiseMin(poly[v]);
-      cell.hi = cell.hi.cwiseMax(poly[v]);
-    }
-    cell.area += twice_area;
-    cell.area_centroid += weighted;
-    cell.area_normal += tri_normal.normalized() * twice_area;
+    // A piece without area touches the cell at an edge or a point only.
+    if (accumulate_piece(acc[li], poly, n, tri_normal)) pieces.emplace_back(li, triangle);
   });
 
   // Interior cells: those the outside cannot reach through non-surface cells (6-connected
