@@ -21,7 +21,7 @@ void SpatialHashBroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& bo
 bool SpatialHashBroadPhase::find_pairs(std::vector<std::pair<Index, Index>>& pairs) {
   StageCounters counters;
   StepReport report;
-  report.hash_overflow = !build_spatial_hash(model_, model_.box_count(), 0.0, scratch_, counters);
+  report.hash_overflow = !build_spatial_hash(model_, model_.box_count(), 0.0, model_.hash_table_size, scratch_, counters);
   broad_phase_pairs(model_, scratch_, pairs);
   if (report.hash_overflow) grow_scratch(model_, scratch_, report);
   return !report.hash_overflow;

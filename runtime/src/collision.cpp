@@ -12,14 +12,14 @@ namespace ffd {
 
 BoxLevel box_level(const Model& model, Accuracy accuracy) {
   switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 8, false, false};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 8, false, false};
-    case Accuracy::CentreOfMass: return {&model.boxes, 9, false, false};
-    case Accuracy::SampleNodes: return {&model.boxes, 9, true, false};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 9, false, false};
-    case Accuracy::Exact: return {&model.boxes, 9, false, true};
+    case Accuracy::GridCells: return {&model.grid_boxes, 8, false, false, model.hash_table_size};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 8, false, false, model.hash_table_size};
+    case Accuracy::CentreOfMass: return {&model.boxes, 9, false, false, model.hash_table_size};
+    case Accuracy::SampleNodes: return {&model.boxes, 9, true, false, model.hash_table_size};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 9, false, false, model.sub_box_hash_table_size};
+    case Accuracy::Exact: return {&model.boxes, 9, false, true, model.hash_table_size};
   }
-  return {&model.boxes, 9, false, false};
+  return {&model.boxes, 9, false, false, model.hash_table_size};
 }
 
 void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b) {
@@ -209,7 +209,7 @@ bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
 template <class WantedFn, class PairFn>
 void for_each_candidate_pair(const Model& model, const Scratch& scratch, WantedFn&& wanted, PairFn&& visit) {
   const double inv_cell = 1.0 / model.hash_cell_size;
-  for (Index bucket = 0; bucket < model.hash_table_size; ++bucket) {
+  for (Index bucket = 0; bucket < scratch.hash_table_size; ++bucket) {
     const Index begin = scratch.bucket_begin[bucket], end = scratch.bucket_begin[bucket + 1];
     for (Index i = begin; i < end; ++i) {
       const Scratch::HashEntry& e1 = scratch.entries[i];
@@ -232,10 +232,11 @@ void for_each_candidate_pair(const Model& model, const Scratch& scratch, WantedF
 
 }  // namespace
 
-bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Scratch& scratch,
+bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Index table_size, Scratch& scratch,
                         StageCounters& counters) {
   const double inv_cell = 1.0 / model.hash_cell_size;
-  const Index table = model.hash_table_size;
+  const Index table = table_size;
+  scratch.hash_table_size = table;
   const std::size_t capacity = scratch.entries.size();
   std::size_t count = 0;
   bool fits = true;

@@ -13,6 +13,7 @@ struct BoxLevel {
   int tested_nodes;  // the first 8 (corners) or all 9 (+ centre) of each box's nodes
   bool samples;      // also Model::box_samples (level 3)
   bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
+  Index hash_table_size;  // buckets of the broad phase for these boxes
 };
 BoxLevel box_level(const Model& model, Accuracy accuracy);
 
@@ -47,10 +48,10 @@ inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Ind
 // and maps NaN to 0, so no input is undefined behaviour.
 std::int64_t hash_grid_coordinate(double x, double inv_cell);
 
-// Fills scratch.bucket_begin / entries from the current nodes of the first `box_count`
-// boxes, each AABB widened by `margin` (m). Returns false when the entry buffer was too
+// Fills scratch.bucket_begin / entries (`table_size` buckets) from the current nodes of the
+// first `box_count` boxes, each AABB widened by `margin` (m). Returns false when the entry buffer was too
 // small (the boxes that did not fit are left out of this step).
-bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Scratch& scratch,
+bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Index table_size, Scratch& scratch,
                         StageCounters& counters);
 
 // Algorithm 1 over the hash table: each overlapping box pair once, nodes of each box tested

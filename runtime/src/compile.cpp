@@ -389,7 +389,10 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     model.pipeline.push_back(Stage::NarrowPhase);
     // Paper: 4000 buckets. Large scenes get at least two buckets per box so chains stay short.
     model.hash_table_size = static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.box_count()));
-    // The same table serves every box set (level 4 has several boxes per cell).
+    // Level 4 has several boxes a cell: its own, larger table keeps the chains as short
+    // (the other levels keep theirs, and with it the order in which pairs are answered).
+    model.sub_box_hash_table_size =
+        static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.sub_boxes.size()));
     double largest_cell = 0.0;
     for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
     model.hash_cell_size = spec.settings.hash_cell_size > 0.0 ? spec.settings.hash_cell_size : largest_cell;

@@ -45,7 +45,7 @@ Scratch make_scratch(const Model& model) {
   s.box_min.resize(boxes);
   s.box_max.resize(boxes);
   if (model.hash_table_size > 0) {
-    s.bucket_begin.assign(model.hash_table_size + 1, 0);
+    s.bucket_begin.assign(std::max(model.hash_table_size, model.sub_box_hash_table_size) + 1, 0);
     // A box no larger than a hash cell touches at most 8 of them.
     const std::size_t capacity = 8 * boxes + 64;
     s.entries.resize(capacity);
@@ -103,7 +103,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::BroadPhase: {
         // The exact level pairs cells whose boxes come within its contact radius.
         const double margin = level.exact ? model.surface_contact_radius : 0.0;
-        report.hash_overflow = !build_spatial_hash(model, level.boxes->size(), margin, scratch, counters);
+        report.hash_overflow =
+            !build_spatial_hash(model, level.boxes->size(), margin, level.hash_table_size, scratch, counters);
         break;
       }
       case Stage::NarrowPhase: {

@@ -61,8 +61,8 @@ void check_against_brute_force(const Vec3& centre, double cell, Index table, uns
   last.hash_overflow = true;
   // Boxes of up to 1.5 hash cells touch up to 27 cells: the first try overflows and the
   // buffer grows between "steps", as in a run.
-  for (int i = 0; i < 10 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
-  REQUIRE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.scratch, counters));
+  for (int i = 0; i < 10 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
+  REQUIRE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
   CHECK(counters.hash_entries >= 400);
   std::vector<std::pair<Index, Index>> hashed = broad_phase_pairs(r.model, r.scratch);
   std::vector<std::pair<Index, Index>> expected = brute_force_pairs(r.scratch, 400);
@@ -102,9 +102,9 @@ TEST_CASE("the entry buffer overflows into a flag, and grows between steps", "[b
   RandomBoxes r = random_boxes(50, Vec3::Zero(), 0.1, 0.02, 4000, 9);
   for (auto& nodes : r.scratch.box_nodes) nodes[8] = nodes[0] + Vec3(0.2, 0.2, 0.2);  // 10 hash cells a side
   StageCounters counters;
-  CHECK_FALSE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.scratch, counters));
+  CHECK_FALSE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
   StepReport last;
   last.hash_overflow = true;
-  for (int i = 0; i < 30 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
-  CHECK(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.scratch, counters));
+  for (int i = 0; i < 30 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
+  CHECK(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
 }

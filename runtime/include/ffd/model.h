@@ -137,6 +137,7 @@ struct Model {
 
   // Broad phase.
   Index hash_table_size = 0;  // 0 when the scene has no collisions at all
+  Index sub_box_hash_table_size = 0;  // level 4's: its several boxes a cell get as many buckets
   double hash_cell_size = 0.0;
 
   std::size_t node_count() const { return node_rest.size(); }

@@ -63,7 +63,8 @@ struct Scratch {
     Index box;
     std::int64_t gx, gy, gz;  // integer hash-grid coordinates
   };
-  std::vector<Index> bucket_begin;      // (T + 1)
+  std::vector<Index> bucket_begin;      // (T + 1) for the largest table of any level
+  Index hash_table_size = 0;            // T of the table built last
   std::vector<HashEntry> entries;       // capacity grown between steps
   std::vector<HashEntry> entries_unsorted;
   std::vector<Index> entry_bucket;
