@@ -67,6 +67,7 @@ std::string recording_text(const Model& model, const Recording& r) {
         break;
       case CommandKind::Resume: s << "resume = true\n"; break;
       case CommandKind::SingleStep: s << "single_step = true\n"; break;
+      case CommandKind::AutoAccuracy: break;  // never on the applied stream: its SetAccuracy commands are
     }
     s << "\n";
   }

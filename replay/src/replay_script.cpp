@@ -16,7 +16,7 @@ const std::vector<std::string_view> kRootKeys = {"format", "version", "descripti
                                                  "duration_ms", "event", "probe_path", "drag_path",
                                                  "assert", "record"};
 const std::vector<std::string_view> kEventKeys = {"at_step", "at_ms", "probe", "grab", "drag", "release",
-                                                  "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "accuracy", "budget_us",
+                                                  "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "accuracy", "auto_accuracy", "budget_us",
                                                   "pause_ms", "resume", "single_step", "reset"};
 const std::vector<std::string_view> kGrabKeys = {"object", "point", "cell", "local", "target"};
 const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
@@ -211,6 +211,9 @@ class ScriptReader {
       } else if (key == "accuracy") {
         c.kind = CommandKind::SetAccuracy;
         c.value = static_cast<double>(e.integer(key, 0, 0, kAccuracyLevels - 1));
+      } else if (key == "auto_accuracy") {
+        c.kind = CommandKind::AutoAccuracy;
+        c.value = e.boolean(key, false) ? 1.0 : 0.0;
       } else if (key == "budget_us") {
         c.kind = CommandKind::SetBudget;
         c.value = e.number(key, 0.0, kPositive);

@@ -20,6 +20,7 @@ const char* command_name(CommandKind kind) {
     case CommandKind::SetAccuracy: return "accuracy";
     case CommandKind::Reset: return "reset";
     case CommandKind::SetBudget: return "budget";
+    case CommandKind::AutoAccuracy: return "auto_accuracy";
     case CommandKind::Pause: return "pause";
     case CommandKind::Resume: return "resume";
     case CommandKind::SingleStep: return "single_step";
@@ -53,6 +54,7 @@ bool command_is_valid(const Model& model, const Command& c) {
       return std::isfinite(c.value) && c.value >= 0.0 && c.value < kAccuracyLevels && c.value == std::floor(c.value);
     case CommandKind::SetBudget: return std::isfinite(c.value) && c.value > 0.0;
     case CommandKind::Pause: return std::isfinite(c.value) && c.value >= 0.0;
+    case CommandKind::AutoAccuracy: return c.value == 0.0 || c.value == 1.0;
     case CommandKind::Reset:
     case CommandKind::Resume:
     case CommandKind::SingleStep: return true;

@@ -334,8 +334,18 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
         const CellAccumulator& part = parts[c * parts_per_box + p];
         if (!part.has_surface) continue;
         const Vec3 normal = part.area_normal.norm() > 0.0 ? Vec3(part.area_normal.normalized()) : Vec3::Zero();
-        out.sub_box_local[c].push_back(fitted_box(part.lo.cwiseMax(0.0), part.hi.cwiseMin(1.0), normal,
-                                                  Vec3(part.area_centroid / part.area), min_box_thickness / k, 0.0, 1.0));
+        // Tight on the outside of the surface, as deep as the FFD AABB on the inside: a part
+        // as thin as the surface piece would let a node that crossed more than half of it in
+        // one step leave by the far face (eq. 7 picks the nearest), into the object.
+        Vec3 lo = part.lo.cwiseMax(0.0), hi = part.hi.cwiseMin(1.0);
+        const Vec3& parent_lo = out.box_local[c][0];
+        const Vec3& parent_hi = out.box_local[c][7];
+        for (int a = 0; a < 3; ++a) {
+          if (normal[a] > 0.5) lo[a] = std::min(lo[a], parent_lo[a]);
+          else if (normal[a] < -0.5) hi[a] = std::max(hi[a], parent_hi[a]);
+        }
+        out.sub_box_local[c].push_back(
+            fitted_box(lo, hi, normal, Vec3(part.area_centroid / part.area), min_box_thickness, 0.0, 1.0));
       }
       // A cell whose surface is only vertices touching it has no part with area: its
       // whole FFD AABB stands in.

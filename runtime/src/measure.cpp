@@ -43,6 +43,7 @@ SurfaceContactReport measure_surface_contacts(const Model& model, const State& s
   if (!(search_radius > 0.0))
     for (const ObjectModel& o : model.objects) search_radius = std::max(search_radius, o.cell_size);
   SurfaceContactReport report;
+  report.search_radius_m = search_radius;
   std::vector<SurfaceMesh> surfaces;
   std::vector<std::pair<Vec3, Vec3>> bounds;
   for (Index i = 0; i < model.objects.size(); ++i) {

@@ -77,8 +77,11 @@ struct PhysicsLoop::Impl {
         applied(options.command_capacity * 4),
         snapshots_ready(options.snapshot_pool),
         snapshots_free(options.snapshot_pool),
-        frames(make_frame_prototype(m)) {
+        frames(make_frame_prototype(m)),
+        governor(options.governor) {
     budget_ns = options.budget_ns;
+    auto_accuracy = options.auto_accuracy;
+    governor.start(state.params.accuracy);
     snapshot_storage.resize(options.snapshot_pool);
     for (Snapshot& s : snapshot_storage) {
       s.x.resize(model.node_count());
@@ -92,6 +95,7 @@ struct PhysicsLoop::Impl {
   void take_step(std::int64_t release_ns, std::int64_t wake_ns);
   void publish_frame();
   void publish_snapshot();
+  void govern_accuracy(std::int64_t compute_ns);
   template <class Queue, class T>
   bool push_lossless(Queue& queue, const T& item, std::atomic<std::uint64_t>& dropped);
 
@@ -116,12 +120,14 @@ struct PhysicsLoop::Impl {
   std::vector<Snapshot> snapshot_storage;
   NewestMailbox<Frame> frames;
   bool reader_has_frame = false;
+  AccuracyGovernor governor;
+  bool auto_accuracy = false;
 
   std::thread thread;
   std::atomic<bool> stop{false};
   std::atomic<bool> done{false};
   std::atomic<std::uint64_t> steps{0}, misses{0}, overruns{0}, telemetry_dropped{0}, snapshots_dropped{0},
-      rejected{0}, late{0}, frames_published{0}, applied_dropped{0};
+      rejected{0}, late{0}, frames_published{0}, applied_dropped{0}, accuracy_switches{0};
   std::atomic<bool> fifo{false}, locked{false};
 };
 
@@ -153,6 +159,11 @@ bool PhysicsLoop::Impl::apply_due_commands(bool& step_now, std::uint32_t& applie
         break;
       case CommandKind::Resume: paused = false; break;
       case CommandKind::SingleStep: step_now = true; break;
+      case CommandKind::AutoAccuracy:
+        auto_accuracy = c.value != 0.0;
+        if (auto_accuracy) governor.start(state.params.accuracy);
+        ++applied_count;
+        continue;  // not recorded: the SetAccuracy commands it makes are
       default: apply_command(model, initial, state, c); break;
     }
     ++applied_count;
@@ -202,6 +213,7 @@ void PhysicsLoop::Impl::publish_frame() {
   f.beta = state.params.beta;
   f.gravity = state.params.gravity;
   f.accuracy = state.params.accuracy;
+  f.auto_accuracy = auto_accuracy;
   f.report = report;
   f.paused = paused;
   frames.publish();
@@ -225,6 +237,20 @@ void PhysicsLoop::Impl::publish_snapshot() {
   snapshots_ready.enqueue(s);  // never grows: the pool has as many slots as the queue
 }
 
+// The governor's decision becomes a SetAccuracy command for the next step, queued behind
+// whatever is pending, so it is applied, counted and recorded like any other command.
+void PhysicsLoop::Impl::govern_accuracy(std::int64_t compute_ns) {
+  const Accuracy level = state.params.accuracy;
+  const Accuracy next = governor.observe(level, compute_ns, budget_ns);
+  if (next == level || pending_count == pending.size()) return;  // full: the governor sees the level unchanged
+  Command& c = pending[pending_count++];
+  c = Command{};
+  c.step = state.step;
+  c.kind = CommandKind::SetAccuracy;
+  c.value = static_cast<double>(next);
+  accuracy_switches.fetch_add(1, std::memory_order_relaxed);
+}
+
 void PhysicsLoop::Impl::take_step(std::int64_t release_ns, std::int64_t wake_ns) {
   std::uint32_t applied_count = 0;
   bool single = false;
@@ -240,6 +266,7 @@ void PhysicsLoop::Impl::take_step(std::int64_t release_ns, std::int64_t wake_ns)
   t.grab_force_n = state.grab.active ? state.grab.force : Vec3::Zero();
   t.contacts = total_contacts(report);
   t.commands_applied = applied_count;
+  t.accuracy = state.params.accuracy;
   t.stage_ns = report.stage_ns;
   if (options.hash_every && state.step % options.hash_every == 0) {
     t.has_hash = true;
@@ -258,6 +285,7 @@ void PhysicsLoop::Impl::take_step(std::int64_t release_ns, std::int64_t wake_ns)
   }
   t.compute_ns = end_ns - wake_ns;
   if (!t.deadline_met) misses.fetch_add(1, std::memory_order_relaxed);
+  if (auto_accuracy) govern_accuracy(t.compute_ns);
   push_lossless(telemetry, t, telemetry_dropped);
   steps.fetch_add(1, std::memory_order_relaxed);
 }
@@ -373,6 +401,7 @@ LoopCounters PhysicsLoop::counters() const {
   c.commands_late = i.late.load();
   c.commands_unrecorded = i.applied_dropped.load();
   c.frames_published = i.frames_published.load();
+  c.accuracy_switches = i.accuracy_switches.load();
   c.realtime_priority = i.fifo.load();
   c.memory_locked = i.locked.load();
   return c;

@@ -258,3 +258,38 @@ TEST_CASE("Physics loop: malformed commands are dropped and counted") {
   CHECK(run.applied.empty());
   CHECK(run.final_hash == hashes_by_direct_stepping(model, {}, 20).back());
 }
+
+TEST_CASE("Physics loop: budget-aware accuracy switches are recorded and replay bit for bit") {
+  const Model model = test::compile_quietly(loop_scene());
+  const std::uint64_t steps = 1200;
+  LoopOptions options = options_for(Pacing::Fast, steps);
+  // A budget of 1 s: every level fits, so the governor climbs one level per 250-step window
+  // from the scene's level 2 once it is turned on at step 100, until it is turned off at 700.
+  options.budget_ns = 1'000'000'000;
+  Command on = at(100, CommandKind::AutoAccuracy);
+  on.value = 1.0;
+  Command off = at(700, CommandKind::AutoAccuracy);
+  off.value = 0.0;
+  const LoopRun run = run_loop(model, {on, off}, options);
+  REQUIRE(run.telemetry.size() == steps);
+  std::vector<Command> switches;
+  for (const Command& c : run.applied) {
+    CHECK(c.kind != CommandKind::AutoAccuracy);  // only its decisions are on the record
+    if (c.kind == CommandKind::SetAccuracy) switches.push_back(c);
+  }
+  REQUIRE(switches.size() == 2);
+  CHECK(switches[0].step == 350);
+  CHECK(switches[0].value == 3.0);
+  CHECK(switches[1].step == 600);
+  CHECK(switches[1].value == 4.0);
+  CHECK(run.counters.accuracy_switches == 2);
+  CHECK(run.telemetry[349].accuracy == Accuracy::CentreOfMass);
+  CHECK(run.telemetry[350].accuracy == Accuracy::SampleNodes);
+  CHECK(run.telemetry.back().accuracy == Accuracy::SubBoxes);
+  // The recorded commands alone, applied by plain stepping, give the same states.
+  const std::vector<std::uint64_t> expected = hashes_by_direct_stepping(model, run.applied, steps);
+  for (std::size_t i = 0; i < steps; ++i) {
+    INFO("step " << i + 1);
+    REQUIRE(run.telemetry[i].state_hash == expected[i]);
+  }
+}

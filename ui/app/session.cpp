@@ -39,6 +39,7 @@ void Session::poll() {
     history_.next = (history_.next + 1) % LatencyHistory::kLength;
     ++history_.steps;
     if (!t.deadline_met) ++history_.misses;
+    ++history_.steps_at_level[static_cast<std::size_t>(t.accuracy)];
     for (std::size_t s = 0; s < kStageCount; ++s) {
       const double us = t.stage_ns[s] < 0 ? 0.0 : static_cast<double>(t.stage_ns[s]) * 1e-3;
       history_.stage_us[s] += (us - history_.stage_us[s]) * kAverageWeight;

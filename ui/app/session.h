@@ -30,6 +30,7 @@ struct LatencyHistory {
   std::size_t next = 0;
   std::uint64_t steps = 0;
   std::uint64_t misses = 0;
+  std::array<std::uint64_t, kAccuracyLevels> steps_at_level{};  // since the start
   std::array<double, kStageCount> stage_us{};   // moving average over about 200 steps
   double compute_average_us = 0.0;
   std::uint32_t contacts = 0;                    // at the newest step

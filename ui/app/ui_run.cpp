@@ -10,6 +10,7 @@ void collect_result(Viewer& viewer, UiRunResult& result) {
   result.lateness_ns = session.lateness_ns();
   result.counters = session.counters();
   result.finite = session.history().finite;
+  result.steps_at_level = session.history().steps_at_level;
   result.log = session.log();
   for (const ObjectModel& o : session.model().objects) result.model_object_names.push_back(o.name);
 }

@@ -27,6 +27,7 @@ struct UiRunResult {
   std::string renderer;            // GL_RENDERER and version
   std::vector<std::int64_t> compute_ns, lateness_ns;  // every step's
   LoopCounters counters;
+  std::array<std::uint64_t, kAccuracyLevels> steps_at_level{};
   bool finite = true;
   Recording log;                   // every applied command and hash (for --record)
   std::vector<std::string> model_object_names;

@@ -439,6 +439,26 @@ void Viewer::tuning_panel() {
       send({.kind = CommandKind::SetProbeStiffness, .value = probe_stiffness_});
     remember("probe_stiffness");
   }
+  // Accuracy: a level picked by hand turns the budget-aware choice off.
+  const int level = static_cast<int>(frame ? frame->accuracy : session_->initial().params.accuracy);
+  const bool automatic = frame && frame->auto_accuracy;
+  char level_label[64];
+  std::snprintf(level_label, sizeof level_label, "%d %s", level, accuracy_name(static_cast<Accuracy>(level)));
+  if (ImGui::BeginCombo("accuracy", level_label)) {
+    for (int l = 0; l < kAccuracyLevels; ++l) {
+      std::snprintf(level_label, sizeof level_label, "%d %s", l, accuracy_name(static_cast<Accuracy>(l)));
+      if (ImGui::Selectable(level_label, l == level)) {
+        if (automatic) send({.kind = CommandKind::AutoAccuracy, .value = 0.0});
+        send({.kind = CommandKind::SetAccuracy, .value = static_cast<double>(l)});
+      }
+    }
+    ImGui::EndCombo();
+  }
+  remember("accuracy");
+  bool auto_on = automatic;
+  if (ImGui::Checkbox("fit accuracy to the budget", &auto_on))
+    send({.kind = CommandKind::AutoAccuracy, .value = auto_on ? 1.0 : 0.0});
+  remember("auto_accuracy");
   if (ImGui::SliderFloat("budget µs", &budget_us_, 100.0f, 5000.0f, "%.0f", ImGuiSliderFlags_Logarithmic))
     send({.kind = CommandKind::SetBudget, .value = budget_us_});
   remember("budget");

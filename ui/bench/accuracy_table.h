@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bench/paper_table.h"
+#include "ffd/measure.h"
 #include "ffd/model.h"
 
 namespace ffdbench {
@@ -17,18 +18,27 @@ namespace ffdbench {
 struct AccuracyRun {
   std::string scene;  // the scene's name
   ffd::Accuracy level = ffd::Accuracy::CentreOfMass;
-  std::uint64_t steps = 0, samples = 0;
+  std::uint64_t steps = 0;
+  std::uint64_t samples = 0;       // surface samples over the second half of the run
+  std::uint64_t rest_samples = 0;  // of those, the ones where some object was at rest
   double collision_p50_ms = 0, collision_p99_ms = 0;  // box update + broad + narrow + planes
   double step_p50_ms = 0;
-  // Over the surface samples of the settled part of the run (the second half), each
-  // sample's worst pair: the widest gap between surfaces within a cell size of each other
-  // that do not penetrate, and the deepest penetration.
+  // Over the surface samples of the second half of the run. Gap: in each sample with an
+  // object at rest, the widest of their gaps to what they rest on (resting_gap). Penetration
+  // and penetrating vertices: each sample's deepest pair and its total.
   double gap_mean_mm = 0, gap_max_mm = 0;
   double penetration_mean_mm = 0, penetration_max_mm = 0;
   double penetrating_vertices_mean = 0;
   std::size_t penetrating_vertices_max = 0;
   bool finite = true;
 };
+
+// The floating gap of the objects at rest (every lattice node slower than 5 cm/s), m: for
+// each, the distance to the nearest other surface or plane (0 where they penetrate, the
+// report's search radius where nothing is that near), and the widest of those. -1 when no
+// object is at rest. An object lying beside another without resting on it is nearest to what
+// it does rest on, so that neighbour does not count.
+double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::SurfaceContactReport& contacts);
 
 // Runs `model` for `steps` steps at `level`; samples the surfaces every `sample_every`
 // steps over the second half.

@@ -54,6 +54,7 @@ struct RunOptions {
   long long hash_every = 100;
   std::string report_path;
   double period_us = 1000.0, budget_us = 1000.0, spin_us = 20.0;
+  bool auto_accuracy = false;  // budget-aware accuracy from the scene's level up
   bool quiet = false;
 };
 void register_run(CLI::App& app, RunOptions& options);
@@ -72,7 +73,7 @@ int run_bench(const BenchOptions& options);
 
 struct AccuracyOptions {
   std::vector<std::string> scenes;  // empty: the two teapots and the five soft bunnies
-  std::uint64_t steps = 1500;
+  std::uint64_t steps = 3000;
   std::vector<int> levels;          // empty: all
   std::string out_dir = "out/accuracy";
   std::string readme;               // Markdown file whose accuracy section is replaced

@@ -49,6 +49,7 @@ struct RunFigures {
   std::string mode;  // "window", "headless viewer", "headless loop"
   std::vector<std::int64_t> compute_ns, lateness_ns;
   ffd::LoopCounters counters;
+  std::array<std::uint64_t, ffd::kAccuracyLevels> steps_at_level{};
   bool finite = true;
   ffd::Recording log;
   nlohmann::json ui;  // UI figures, when a viewer ran
@@ -70,6 +71,12 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
                 steps ? 100.0 * static_cast<double>(f.counters.deadline_misses) / static_cast<double>(steps) : 0.0,
                 static_cast<unsigned long long>(f.counters.overruns), static_cast<unsigned long long>(f.counters.commands_late),
                 f.counters.realtime_priority ? "yes" : "no", f.counters.memory_locked ? "yes" : "no");
+    if (f.counters.accuracy_switches > 0 || o.auto_accuracy) {
+      std::printf("accuracy: %llu switches; steps per level", static_cast<unsigned long long>(f.counters.accuracy_switches));
+      for (int l = 0; l < ffd::kAccuracyLevels; ++l)
+        std::printf(" %d: %llu", l, static_cast<unsigned long long>(f.steps_at_level[static_cast<std::size_t>(l)]));
+      std::printf("\n");
+    }
     if (!f.ui.is_null())
       std::printf("ui: %s, %zu frames, %.1f ms per frame (max %.1f), %zu commands applied\n",
                   f.ui.value("renderer", "").c_str(), f.ui.value("frames", std::size_t{0}), f.ui.value("frame_mean_ms", 0.0),
@@ -90,6 +97,8 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
                         {"commands_applied", f.log.commands.size()},
                         {"commands_late", f.counters.commands_late},
                         {"telemetry_dropped", f.counters.telemetry_dropped},
+                        {"accuracy_switches", f.counters.accuracy_switches},
+                        {"steps_at_accuracy_level", f.steps_at_level},
                         {"sched_fifo", f.counters.realtime_priority},
                         {"memory_locked", f.counters.memory_locked}};
     if (!f.ui.is_null()) j["ui"] = f.ui;
@@ -127,6 +136,7 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
   options.budget_ns = static_cast<std::int64_t>(o.budget_us * 1000.0);
   options.spin_ns = static_cast<std::int64_t>(o.spin_us * 1000.0);
   options.hash_every = static_cast<std::uint32_t>(o.hash_every);
+  options.auto_accuracy = o.auto_accuracy;
   return options;
 }
 
@@ -148,6 +158,7 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   f.lateness_ns = session.lateness_ns();
   f.counters = session.counters();
   f.finite = session.history().finite;
+  f.steps_at_level = session.history().steps_at_level;
   f.log = session.log();
   return f;
 }
@@ -176,6 +187,9 @@ void register_run(CLI::App& app, RunOptions& o) {
   cmd->add_option("--report", o.report_path, "Write the latency figures as JSON to this file");
   cmd->add_option("--period-us", o.period_us, "Loop period, microseconds (1000 = 1 kHz)")->check(CLI::Range(50.0, 1e6));
   cmd->add_option("--budget-us", o.budget_us, "Latency budget per step, microseconds")->check(CLI::Range(1.0, 1e7));
+  cmd->add_flag("--auto-accuracy", o.auto_accuracy,
+                "Budget-aware accuracy: run the most accurate collision level whose steps fit the budget (from the "
+                "scene's level up); each switch is recorded");
   cmd->add_option("--spin-us", o.spin_us, "Busy-wait before each release, microseconds")->check(CLI::Range(0.0, 1e6));
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
@@ -267,6 +281,7 @@ int run_run(const RunOptions& given) {
     figures.lateness_ns = std::move(r.lateness_ns);
     figures.counters = r.counters;
     figures.finite = r.finite;
+    figures.steps_at_level = r.steps_at_level;
     figures.log = std::move(r.log);
     figures.ui = {{"renderer", r.renderer},         {"frames", r.ui_frames},
                   {"frame_mean_ms", r.ui_frame_mean_ms}, {"frame_max_ms", r.ui_frame_max_ms},

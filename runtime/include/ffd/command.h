@@ -27,6 +27,8 @@ enum class CommandKind : std::uint8_t {
   Pause,         // value: ticks to stay paused, 0 = until Resume
   Resume,
   SingleStep,    // while paused: take one step
+  AutoAccuracy,  // value: 1 = budget-aware accuracy on (from the current level up), 0 = off.
+                 // Not itself recorded: the SetAccuracy commands it makes are.
 };
 const char* command_name(CommandKind kind);
 

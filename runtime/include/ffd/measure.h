@@ -33,6 +33,7 @@ struct SurfaceContactReport {
   double max_penetration_m = 0.0;
   double max_gap_m = 0.0;
   std::size_t penetrating_vertices = 0;  // summed over the contacts
+  double search_radius_m = 0.0;          // pairs farther apart than this are not reported
 };
 SurfaceContactReport measure_surface_contacts(const Model& model, const State& state, double search_radius = 0.0);
 

@@ -20,6 +20,7 @@
 #include <memory>
 #include <vector>
 
+#include "ffd/accuracy_governor.h"
 #include "ffd/command.h"
 #include "ffd/model.h"
 #include "ffd/state.h"
@@ -47,6 +48,10 @@ struct LoopOptions {
   std::size_t telemetry_capacity = 1 << 14;  // records: 16 s of stalled reader at 1 kHz
   std::size_t command_capacity = 1 << 12;    // commands held for future steps
   std::size_t snapshot_pool = 64;
+  // Budget-aware accuracy (accuracy_governor.h) from the start; the AutoAccuracy command
+  // turns it on and off while the loop runs. Its switches go out on the applied stream.
+  bool auto_accuracy = false;
+  AccuracyGovernorSettings governor;
   // Called on the physics thread just before the first tick and after the last one (for
   // naming or pinning the thread, and for tests that count what the loop does).
   std::function<void()> on_thread_start, on_thread_stop;
@@ -70,6 +75,7 @@ struct Telemetry {
   Vec3 grab_force_n = Vec3::Zero();
   std::uint32_t contacts = 0;          // inter + self + plane + probe contacts answered
   std::uint32_t commands_applied = 0;
+  Accuracy accuracy = Accuracy::CentreOfMass;  // the level this step ran at
   std::array<std::int64_t, kStageCount> stage_ns{};
 };
 
@@ -85,6 +91,7 @@ struct Frame {
   double alpha = 0.0, beta = 0.0;
   Vec3 gravity = Vec3::Zero();
   Accuracy accuracy = Accuracy::CentreOfMass;
+  bool auto_accuracy = false;  // the governor chooses the level
   StepReport report;
   bool paused = false;
 };
@@ -107,6 +114,7 @@ struct LoopCounters {
   std::uint64_t commands_late = 0;        // arrived after their step had run: applied at once
   std::uint64_t commands_unrecorded = 0;  // real time only: applied, but the recorder fell behind
   std::uint64_t frames_published = 0;
+  std::uint64_t accuracy_switches = 0;    // made by the budget-aware governor
   bool realtime_priority = false;         // SCHED_FIFO was granted
   bool memory_locked = false;             // mlockall succeeded
 };
