@@ -93,6 +93,8 @@ const AccuracyRun* find_run(const std::vector<AccuracyRun>& runs, const std::str
   return nullptr;
 }
 
+std::string gap_text(const AccuracyRun& r) { return r.rest_samples ? fixed(r.gap_max_mm, 2) + " mm" : "none at rest"; }
+
 std::vector<std::string> scenes_of(const std::vector<AccuracyRun>& runs) {
   std::vector<std::string> scenes;
   for (const AccuracyRun& r : runs)
@@ -128,8 +130,7 @@ std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::s
     const AccuracyRun* exact = find_run(runs, scene, ffd::Accuracy::Exact);
     if (paper && exact && paper->collision_p50_ms > 0.0) {
       s << "\nLevel 2 (the paper's) against level 5 (exact): " << fixed(exact->collision_p50_ms / paper->collision_p50_ms, 1)
-        << "x cheaper per step; gap max " << fixed(paper->gap_max_mm, 2) << " mm vs " << fixed(exact->gap_max_mm, 2)
-        << " mm; penetration max " << fixed(paper->penetration_max_mm, 2) << " mm vs "
+        << "x cheaper per step; gap max " << gap_text(*paper) << " vs " << gap_text(*exact) << "; penetration max " << fixed(paper->penetration_max_mm, 2) << " mm vs "
         << fixed(exact->penetration_max_mm, 2) << " mm.\n";
     }
     s << "\n";
@@ -162,26 +163,38 @@ nlohmann::json to_json(const std::vector<AccuracyRun>& runs) {
 
 std::string gnuplot_script(const std::vector<AccuracyRun>& runs, const std::string& png) {
   std::ostringstream s;
-  s << "set terminal pngcairo size 1100,480 font 'DejaVu Sans,10'\n"
+  s << "set terminal pngcairo size 1100,480 font 'DejaVu Sans,10' noenhanced\n"
     << "set output '" << png << "'\n"
     << "set multiplot layout 1,2 title 'What accuracy costs: contact error against collision time per step "
        "(numbers: accuracy level)'\n"
-    << "set logscale x\nset grid\nset key top right\nset xlabel 'collision time per step, ms (p50, log scale)'\n";
-  const std::vector<std::string> scenes = scenes_of(runs);
+    << "set logscale x\nset grid\nset key top right\nset offsets 0, 0, graph 0.1, 0\n"
+    << "set xlabel 'collision time per step, ms (p50, log scale)'\n";
   const char* panels[2][2] = {{"gap", "widest gap between surfaces at rest, mm (max)"},
                               {"penetration", "deepest penetration, mm (max)"}};
   for (const auto& panel : panels) {
-    s << "set ylabel '" << panel[1] << "'\nplot ";
+    const bool gap = std::string(panel[0]) == "gap";
+    // A level where nothing came to rest has no gap to show.
+    auto shown = [gap](const AccuracyRun& r) { return !gap || r.rest_samples > 0; };
+    std::vector<std::string> scenes;
+    for (const std::string& scene : scenes_of(runs))
+      if (std::any_of(runs.begin(), runs.end(), [&](const AccuracyRun& r) { return r.scene == scene && shown(r); }))
+        scenes.push_back(scene);
+    s << "set ylabel '" << panel[1] << "'\n";
+    if (scenes.empty()) {
+      s << "set label 1 'nothing came to rest' at graph 0.5, 0.5 center\nplot [1:10] [0:1] NaN notitle\nunset label 1\n";
+      continue;
+    }
+    s << "plot ";
     for (std::size_t i = 0; i < scenes.size(); ++i) {
-      s << (i ? ", " : "") << "'-' using 1:2 with linespoints pt 7 lc " << i + 1 << " title '" << scenes[i]
+      s << (i ? ", " : "") << "'-' using 1:2 with points pt 7 ps 1.3 lc " << i + 1 << " title '" << scenes[i]
         << "', '-' using 1:2:3 with labels offset 0.8,0.8 tc lt " << i + 1 << " notitle";
     }
     s << "\n";
     for (const std::string& scene : scenes)
       for (int copy = 0; copy < 2; ++copy) {
         for (const AccuracyRun& r : runs) {
-          if (r.scene != scene) continue;
-          const double y = std::string(panel[0]) == "gap" ? r.gap_max_mm : r.penetration_max_mm;
+          if (r.scene != scene || !shown(r)) continue;
+          const double y = gap ? r.gap_max_mm : r.penetration_max_mm;
           s << std::max(r.collision_p50_ms, 1e-3) << " " << y << " " << static_cast<int>(r.level) << "\n";
         }
         s << "e\n";
