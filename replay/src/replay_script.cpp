@@ -141,6 +141,18 @@ class ScriptReader {
     return std::nullopt;
   }
 
+  // The sampling window of an assertion at `path`: from (default 0), to (default: the end of
+  // the run) and every (default 10 steps), checked against each other and the run's length.
+  void read_window(const TableReader& t, const std::string& path, std::uint64_t run_steps, std::uint64_t& from,
+                   std::uint64_t& to, std::uint64_t& every) const {
+    from = time_of(t, "from", false).value_or(0);
+    to = time_of(t, "to", false).value_or(run_steps);
+    if (to > run_steps) t.fail_here(path, "'to' is after the end of the run");
+    if (from > to) t.fail_here(path, "'from' is after 'to'");
+    every = interval_of(t).value_or(10);
+    if (every == 0) t.fail_here(path, "'every' must be at least one step");
+  }
+
   std::uint64_t ms_to_steps(const TableReader& t, const std::string& key, const Bounds& bounds) const {
     const double ms = t.number(key, 0.0, bounds);
     const double steps = std::round(ms / dt_ms_);
@@ -425,12 +437,7 @@ class ScriptReader {
       gap.max_gap_m = optional_number(g, "max_gap_m", kNonNegative);
       gap.max_penetration_m = optional_number(g, "max_penetration_m", kNonNegative);
       if (!gap.max_gap_m && !gap.max_penetration_m) g.fail_here(path, "give 'max_gap_m' and/or 'max_penetration_m'");
-      gap.from_step = time_of(g, "from", false).value_or(0);
-      gap.to_step = time_of(g, "to", false).value_or(script.steps);
-      if (gap.to_step > script.steps) g.fail_here(path, "'to' is after the end of the run");
-      if (gap.from_step > gap.to_step) g.fail_here(path, "'from' is after 'to'");
-      gap.every_steps = interval_of(g).value_or(10);
-      if (gap.every_steps == 0) g.fail_here(path, "'every' must be at least one step");
+      read_window(g, path, script.steps, gap.from_step, gap.to_step, gap.every_steps);
       script.gaps.push_back(gap);
     }
     const auto positions = array_of_tables(a, "position");
@@ -452,12 +459,7 @@ class ScriptReader {
       limit.max = p.vec3("max", limit.max);
       for (int axis = 0; axis < 3; ++axis)
         if (limit.min[axis] > limit.max[axis]) p.fail_at("max", "is below 'min' on axis " + std::to_string(axis));
-      limit.from_step = time_of(p, "from", false).value_or(0);
-      limit.to_step = time_of(p, "to", false).value_or(script.steps);
-      if (limit.to_step > script.steps) p.fail_here(path, "'to' is after the end of the run");
-      if (limit.from_step > limit.to_step) p.fail_here(path, "'from' is after 'to'");
-      limit.every_steps = interval_of(p).value_or(10);
-      if (limit.every_steps == 0) p.fail_here(path, "'every' must be at least one step");
+      read_window(p, path, script.steps, limit.from_step, limit.to_step, limit.every_steps);
       script.positions.push_back(limit);
     }
     if (const toml::table* rest = a.subtable("rest")) {

@@ -39,8 +39,6 @@ class AccuracyGovernor {
   // `budget_ns`. Returns the level the next step should run at: `level` when nothing changes.
   Accuracy observe(Accuracy level, std::int64_t compute_ns, std::int64_t budget_ns);
 
-  Accuracy floor() const { return floor_; }
-
  private:
   void new_window(Accuracy level);
 
