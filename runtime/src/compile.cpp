@@ -432,6 +432,7 @@ State initial_state(const Model& model) {
       if (o.initial_angular_velocity != Vec3::Zero()) state.v[n] += o.initial_angular_velocity.cross(state.x[n] - centre);
     }
   }
+  state.spring_force.assign(model.springs.size(), 0.0);  // every spring starts at its rest length
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
   state.region_rotation.assign(model.regions.size(), Quat::Identity());
   for (const ObjectModel& o : model.objects)

@@ -11,7 +11,7 @@ namespace ffd {
 struct Energy {
   double kinetic = 0.0;        // J, sum of 1/2 m v^2 over lattice nodes
   double gravitational = 0.0;  // J, sum of -m g . x (zero without the gravity effect)
-  double elastic = 0.0;        // J, sum of 1/2 k (l - l0)^2 over springs
+  double elastic = 0.0;        // J, sum of f^2 / 2k over springs (f: the spring's force in the last step)
   double total() const { return kinetic + gravitational + elastic; }
 };
 Energy compute_energy(const Model& model, const State& state);
