@@ -317,9 +317,9 @@ speed_max_m_s = 0.05
   INFO(format_replay_result(settled.script, result));
   CHECK(result.passed());
   CHECK(result.probe_work_j == 0.0);  // the device never moved
-  // 2.83 J above the 2.46 J it starts with as the 20,000 N/m boxes meet (eq. 9), then less.
-  CHECK(result.max_energy_gain_j > 0.0);
-  CHECK(result.max_energy_gain_j <= 5.0);
+  // The boxes meet with damped contacts (alpha = 1) and only lose energy: the largest
+  // "gain" is the first step's, 0.1 mJ below the 2.46 J they start with.
+  CHECK(std::abs(result.max_energy_gain_j) < 1.0e-3);
   CHECK(result.initial_energy_j > 0.0);
 
   // The same run with limits it does not meet: each failure names what it measured.
