@@ -63,7 +63,7 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
   }
   const double inv_dt = 1.0 / dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
-  // The force each constraint applied this step (XPBD: lambda / dt^2), N.
+  // The force each constraint applied this step, elastic and damping (XPBD: lambda / dt^2), N.
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = scratch.lambda[s] * inv_dt * inv_dt;
 }
 

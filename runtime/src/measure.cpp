@@ -20,7 +20,8 @@ Energy compute_energy(const Model& model, const State& state) {
     // The energy of the forces the springs applied, f^2 / 2k: the same as 1/2 k (l - l0)^2
     // where the solver converges (f = k (l - l0)), and bounded by the forces where it does not:
     // 4 sweeps leave 10^9 N/m springs stretched by a residue that 1/2 k (l - l0)^2 would read
-    // as 10^5 J the springs never push with.
+    // as 10^5 J the springs never push with. f also holds the springs' damping force, so a
+    // spring changing length fast reads a little more than it stores: never less.
     const double stiffness = state.params.stiffness[i];
     for (Index s = o.spring_begin; s < o.spring_end; ++s)
       e.elastic += 0.5 * state.spring_force[s] * state.spring_force[s] / stiffness;

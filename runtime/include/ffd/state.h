@@ -47,7 +47,8 @@ struct State {
   std::vector<Vec3> x;  // (N) lattice node positions, m
   std::vector<Vec3> v;  // (N) lattice node velocities, m/s
   std::vector<Quat> region_rotation;  // (R) shape-matching rotations, warm start of the next step
-  // (S) N: each spring's force in the last step, from its XPBD multiplier (lambda / dt^2).
+  // (S) N: each spring's force in the last step, elastic and damping, from its XPBD
+  // multiplier (lambda / dt^2).
   // The elastic energy is read from it (measure.h); not part of the state hash (derived).
   std::vector<double> spring_force;
   ProbeState probe;
