@@ -134,6 +134,65 @@ Vec3 surface_vertex(const Model& model, const State& state, Index v) {
   return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
 }
 
+// Maps the surface vertices of `cell` (and their AABB) into the level-5 cache.
+void refresh_cell_vertices(const Model& model, const State& state, Scratch& scratch, Index cell) {
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
+    const Index v = model.cell_vertices[i];
+    const Vec3 p = surface_vertex(model, state, v);
+    scratch.surface_x[v] = p;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  // A non-finite vertex is in reach of everything, as the per-vertex test takes it.
+  const bool finite = is_finite(lo) && is_finite(hi);
+  scratch.cell_vertex_min[cell] = finite ? lo : Vec3::Constant(-INFINITY);
+  scratch.cell_vertex_max[cell] = finite ? hi : Vec3::Constant(INFINITY);
+  scratch.surface_cell_fresh[cell] = 1;
+}
+
+// Surface vertex v as the lattice is now: the same value surface_vertex() gives.
+const Vec3& cached_vertex(const Model& model, const State& state, Scratch& scratch, Index v) {
+  const Index cell = model.surface_vertex_cell[v];
+  if (!scratch.surface_cell_fresh[cell]) refresh_cell_vertices(model, state, scratch, cell);
+  return scratch.surface_x[v];
+}
+
+// A response moved the nodes of `cell`: the vertices of every cell sharing one are stale.
+void invalidate_surface_around(const Model& model, Scratch& scratch, Index cell) {
+  ++scratch.surface_epoch;
+  for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
+    scratch.surface_cell_fresh[model.cell_neighbours[i]] = 0;
+    scratch.surface_changed[model.cell_neighbours[i]] = scratch.surface_epoch;
+  }
+}
+
+bool triangle_bounds_valid(const Model& model, const Scratch& scratch, Index cell) {
+  const std::uint64_t stamp = scratch.cell_triangle_stamp[cell];
+  if (stamp < scratch.surface_step_epoch) return false;
+  for (Index i = model.cell_triangle_source_begin[cell]; i < model.cell_triangle_source_begin[cell + 1]; ++i)
+    if (scratch.surface_changed[model.cell_triangle_sources[i]] > stamp) return false;
+  return true;
+}
+
+// AABB of the corners of the triangles of `cell`, from the cache.
+void cell_triangle_bounds(const Model& model, const State& state, Scratch& scratch, Index cell, Vec3& lo, Vec3& hi) {
+  if (!triangle_bounds_valid(model, scratch, cell)) {
+    Vec3 l = Vec3::Constant(INFINITY), h = Vec3::Constant(-INFINITY);
+    for (Index t = model.cell_triangle_begin[cell]; t < model.cell_triangle_begin[cell + 1]; ++t)
+      for (Index v : model.surface_triangles[model.cell_triangles[t]]) {
+        const Vec3& p = cached_vertex(model, state, scratch, v);
+        l = l.cwiseMin(p);
+        h = h.cwiseMax(p);
+      }
+    scratch.cell_triangle_min[cell] = l;
+    scratch.cell_triangle_max[cell] = h;
+    scratch.cell_triangle_stamp[cell] = scratch.surface_epoch;
+  }
+  lo = scratch.cell_triangle_min[cell];
+  hi = scratch.cell_triangle_max[cell];
+}
+
 // Level 5, one half of a cell pair: the surface vertices of cell_b against the triangles
 // with a vertex in cell_a, as the lattice is now. The deepest vertex behind its closest
 // triangle moves the cells apart, once per pair half as a plane moves a cell: a response
@@ -144,33 +203,74 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
                    StageCounters& counters, double& max_depth) {
   const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
   if (tri_begin == tri_end) return;
+  const Index vertex_begin = model.cell_vertex_begin[cell_b], vertex_end = model.cell_vertex_begin[cell_b + 1];
+  if (vertex_begin == vertex_end) return;
   const double radius = model.surface_contact_radius;
-  // The triangles' corners, and their AABB widened by the radius: vertices outside it miss
-  // them all.
-  Vec3 reach_lo = Vec3::Constant(INFINITY), reach_hi = Vec3::Constant(-INFINITY);
-  Vec3* corners = scratch.triangle_corners.data();
-  for (Index t = tri_begin; t < tri_end; ++t)
-    for (Index v : model.surface_triangles[model.cell_triangles[t]]) {
-      *corners = surface_vertex(model, state, v);
-      reach_lo = reach_lo.cwiseMin(*corners);
-      reach_hi = reach_hi.cwiseMax(*corners);
-      ++corners;
-    }
+  // The triangles' AABB widened by the radius: vertices outside it miss them all.
+  Vec3 reach_lo, reach_hi;
+  cell_triangle_bounds(model, state, scratch, cell_a, reach_lo, reach_hi);
   reach_lo -= Vec3::Constant(radius);
   reach_hi += Vec3::Constant(radius);
+  // No vertex of cell_b in reach: nothing below would be tested.
+  if (!scratch.surface_cell_fresh[cell_b]) refresh_cell_vertices(model, state, scratch, cell_b);
+  if ((scratch.cell_vertex_max[cell_b].array() < reach_lo.array()).any() ||
+      (scratch.cell_vertex_min[cell_b].array() > reach_hi.array()).any())
+    return;
+  // The triangles' corners and AABBs (by axis too, for the filter below).
+  const Index tri_count = tri_end - tri_begin;
+  Vec3* corners = scratch.triangle_corners.data();
+  bool corners_finite = true;
+  for (Index t = 0; t < tri_count; ++t) {
+    const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[tri_begin + t]];
+    for (int k = 0; k < 3; ++k) {
+      corners[3 * t + k] = cached_vertex(model, state, scratch, tri[k]);
+      corners_finite = corners_finite && is_finite(corners[3 * t + k]);
+    }
+    const Vec3 lo = corners[3 * t].cwiseMin(corners[3 * t + 1]).cwiseMin(corners[3 * t + 2]);
+    const Vec3 hi = corners[3 * t].cwiseMax(corners[3 * t + 1]).cwiseMax(corners[3 * t + 2]);
+    scratch.triangle_min[t] = lo;
+    scratch.triangle_max[t] = hi;
+    for (int k = 0; k < 3; ++k) {
+      scratch.triangle_lo[k][t] = lo[k];
+      scratch.triangle_hi[k][t] = hi[k];
+    }
+  }
+  // (cached_vertex may have refreshed cell_b above: with the same values.)
   double deepest = 0.0;
   Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
-  for (Index i = model.cell_vertex_begin[cell_b]; i < model.cell_vertex_begin[cell_b + 1]; ++i) {
-    const Vec3 p = surface_vertex(model, state, model.cell_vertices[i]);
+  Index* __restrict near = scratch.triangle_near.data();
+  for (Index i = vertex_begin; i < vertex_end; ++i) {
+    const Vec3 p = scratch.surface_x[model.cell_vertices[i]];
     if ((p.array() < reach_lo.array()).any() || (p.array() > reach_hi.array()).any()) continue;
+    counters.node_tests += tri_count;
+    // A triangle whose AABB is a radius or more away along an axis has an AABB distance of
+    // at least the radius, so the test below would skip it: the same differences, in bulk.
+    // With a NaN about, that distance may be NaN and skip nothing: test every triangle.
+    Index candidates = 0;
+    if (corners_finite && is_finite(p)) {
+      const double px = p.x(), py = p.y(), pz = p.z();
+      const double* __restrict lx = scratch.triangle_lo[0].data();
+      const double* __restrict ly = scratch.triangle_lo[1].data();
+      const double* __restrict lz = scratch.triangle_lo[2].data();
+      const double* __restrict hx = scratch.triangle_hi[0].data();
+      const double* __restrict hy = scratch.triangle_hi[1].data();
+      const double* __restrict hz = scratch.triangle_hi[2].data();
+      for (Index t = 0; t < tri_count; ++t) {
+        near[candidates] = t;  // kept, in order, only if near
+        candidates += static_cast<Index>((lx[t] - px < radius) & (px - hx[t] < radius) & (ly[t] - py < radius) &
+                                         (py - hy[t] < radius) & (lz[t] - pz < radius) & (pz - hz[t] < radius));
+      }
+    } else {
+      for (Index t = 0; t < tri_count; ++t) near[candidates++] = t;
+    }
     double best_sq = radius * radius;
     Vec3 best_point = Vec3::Zero(), best_normal = Vec3::Zero();
-    const Vec3* corner = scratch.triangle_corners.data();
-    for (Index t = tri_begin; t < tri_end; ++t, corner += 3) {
-      ++counters.node_tests;
+    for (Index c = 0; c < candidates; ++c) {
+      const Index t = near[c];
+      const Vec3* corner = corners + 3 * t;
       // The distance to the triangle's AABB bounds the distance to the triangle from below.
-      const Vec3 below = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]) - p;
-      const Vec3 above = p - corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
+      const Vec3 below = scratch.triangle_min[t] - p;
+      const Vec3 above = p - scratch.triangle_max[t];
       if (below.cwiseMax(above).cwiseMax(0.0).squaredNorm() >= best_sq) continue;
       const ClosestPoint q = closest_point_on_triangle(p, corner[0], corner[1], corner[2]);
       const double d_sq = (p - q.point).squaredNorm();
@@ -195,6 +295,8 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   max_depth = std::max(max_depth, deepest);
   scratch.record_contact(deepest_point, deepest_normal, deepest, self ? ContactKind::Self : ContactKind::Inter);
   respond_pair<kFriction>(model, state, cell_a, cell_b, deepest_normal, deepest);
+  invalidate_surface_around(model, scratch, cell_a);
+  invalidate_surface_around(model, scratch, cell_b);
 }
 
 bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
@@ -322,6 +424,8 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
 template <bool kFriction>
 void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = model.boxes;
+  std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
+  scratch.surface_step_epoch = ++scratch.surface_epoch;
   for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes), [&](Index b1, Index b2) {
     const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
     const bool same_object = model.cell_object[c1] == model.cell_object[c2];

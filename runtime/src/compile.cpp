@@ -75,6 +75,14 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
   };
   flatten(cell_vertices, model.cell_vertex_begin, model.cell_vertices);
   flatten(cell_triangles, model.cell_triangle_begin, model.cell_triangles);
+  std::vector<std::vector<Index>> sources(model.cell_count());
+  for (std::size_t c = 0; c < cell_triangles.size(); ++c) {
+    for (Index t : cell_triangles[c])
+      for (Index v : model.surface_triangles[t]) sources[c].push_back(model.surface_vertex_cell[v]);
+    std::sort(sources[c].begin(), sources[c].end());
+    sources[c].erase(std::unique(sources[c].begin(), sources[c].end()), sources[c].end());
+  }
+  flatten(sources, model.cell_triangle_source_begin, model.cell_triangle_sources);
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
 }
 

@@ -62,6 +62,21 @@ Scratch make_scratch(const Model& model) {
   for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
     most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);
   s.triangle_corners.resize(3 * most_triangles);
+  s.triangle_min.resize(most_triangles);
+  s.triangle_max.resize(most_triangles);
+  for (int k = 0; k < 3; ++k) {
+    s.triangle_lo[k].resize(most_triangles);
+    s.triangle_hi[k].resize(most_triangles);
+  }
+  s.triangle_near.resize(most_triangles);
+  s.surface_x.resize(model.surface_vertex_cell.size());
+  s.surface_cell_fresh.assign(model.cell_count(), 0);
+  s.cell_vertex_min.resize(model.cell_count());
+  s.cell_vertex_max.resize(model.cell_count());
+  s.cell_triangle_min.resize(model.cell_count());
+  s.cell_triangle_max.resize(model.cell_count());
+  s.cell_triangle_stamp.assign(model.cell_count(), 0);
+  s.surface_changed.assign(model.cell_count(), 0);
   return s;
 }
 

@@ -126,6 +126,9 @@ struct Model {
   std::vector<std::array<Index, 3>> surface_triangles;
   std::vector<Index> cell_vertex_begin, cell_vertices;    // (C + 1), vertex indices
   std::vector<Index> cell_triangle_begin, cell_triangles;  // (C + 1), triangle indices
+  // (C + 1) per cell, the cells the corners of its triangles are bound to: what its
+  // triangles move with.
+  std::vector<Index> cell_triangle_source_begin, cell_triangle_sources;
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
 
   std::vector<Spring> springs;

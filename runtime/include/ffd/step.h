@@ -76,8 +76,24 @@ struct Scratch {
   std::vector<double> spring_inv_denominator;
   std::vector<double> denominator_stiffness;
   std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
-  // Accuracy level 5: corners of the triangles of one cell, 3 per triangle.
+  // Accuracy level 5. Each surface vertex as the lattice is now, mapped a cell at a time
+  // when a step first needs it (a response clears the flags of the cells it moved), and the
+  // AABB of each cell's vertices.
+  std::vector<Vec3> surface_x;                      // (V)
+  std::vector<std::uint8_t> surface_cell_fresh;     // (C)
+  std::vector<Vec3> cell_vertex_min, cell_vertex_max;  // (C)
+  // The AABB of the corners of each cell's triangles, computed at epoch `stamp`; valid while
+  // no cell its corners are bound to has changed since (surface_changed, the epoch of the
+  // last response that moved a cell's vertices). The epoch advances at every step and response.
+  std::vector<Vec3> cell_triangle_min, cell_triangle_max;  // (C)
+  std::vector<std::uint64_t> cell_triangle_stamp;          // (C)
+  std::vector<std::uint64_t> surface_changed;              // (C)
+  std::uint64_t surface_epoch = 0, surface_step_epoch = 0;
+  // Corners of the triangles of one cell, 3 per triangle, and each triangle's AABB by axis.
   std::vector<Vec3> triangle_corners;
+  std::vector<Vec3> triangle_min, triangle_max;
+  std::array<std::vector<double>, 3> triangle_lo, triangle_hi;
+  std::vector<Index> triangle_near;  // the triangles one vertex may lie within the contact radius of
   // Contacts of the step, for frames; fixed capacity, the excess is counted not stored.
   std::vector<Contact> contacts;
   std::uint32_t contact_count = 0;
