@@ -193,9 +193,64 @@ void cell_triangle_bounds(const Model& model, const State& state, Scratch& scrat
   hi = scratch.cell_triangle_max[cell];
 }
 
+bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
+  return (model.cell_coord[cell_a] - model.cell_coord[cell_b]).cwiseAbs().maxCoeff() <= 1;
+}
+
+// Behind the face of the closest triangle (normal: its unnormalised face normal): inside.
+// Near a convex edge p - q lies between the faces' normals, and near a concave one an
+// outside point is closest to a face, so with the surface's true closest point an outside
+// vertex is not taken for an inside one.
+bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
+  return normal.squaredNorm() > 0.0 && (p - closest).dot(normal) < 0.0;
+}
+
+// A cell turned inside out (the Jacobian of eq. 2 at its centre has a negative
+// determinant) turns its piece of the embedded surface inside out too: behind its triangles
+// is outside, and a response to them would push the other object in, crushing more cells.
+bool cell_inverted(const Model& model, const State& state, Index cell) {
+  const std::array<Index, 8>& n = model.cell_nodes[cell];
+  const auto x = [&](int j) -> const Vec3& { return state.x[n[j]]; };  // corner j: (j & 1, j >> 1 & 1, j >> 2 & 1)
+  const Vec3 ds = x(1) - x(0) + x(3) - x(2) + x(5) - x(4) + x(7) - x(6);
+  const Vec3 dt = x(2) - x(0) + x(3) - x(1) + x(6) - x(4) + x(7) - x(5);
+  const Vec3 du = x(4) - x(0) + x(5) - x(1) + x(6) - x(2) + x(7) - x(3);
+  return !(ds.cross(dt).dot(du) > 0.0);
+}
+
+// Narrows (best_sq, best_point, best_normal) to the closest triangle of the cells sharing a
+// node with cell_a. For a pair of one object's cells, the cells that share a node with
+// cell_b are p's own surface and are left out, as the pair test leaves them out. Returns
+// false if the closest triangle lies in an inverted cell: then inside or outside is unknown.
+bool closest_around(const Model& model, const State& state, Scratch& scratch, Index cell_a, Index cell_b, bool self,
+                    const Vec3& p, double& best_sq, Vec3& best_point, Vec3& best_normal) {
+  bool reliable = true;
+  for (Index i = model.cell_neighbour_begin[cell_a]; i < model.cell_neighbour_begin[cell_a + 1]; ++i) {
+    const Index cell = model.cell_neighbours[i];
+    if (cell == cell_a || (self && cells_share_node(model, cell, cell_b))) continue;
+    const bool inverted = cell_inverted(model, state, cell);
+    for (Index t = model.cell_triangle_begin[cell]; t < model.cell_triangle_begin[cell + 1]; ++t) {
+      const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[t]];
+      const Vec3& a = cached_vertex(model, state, scratch, tri[0]);
+      const Vec3& b = cached_vertex(model, state, scratch, tri[1]);
+      const Vec3& c = cached_vertex(model, state, scratch, tri[2]);
+      const Vec3 below = a.cwiseMin(b).cwiseMin(c) - p, above = p - a.cwiseMax(b).cwiseMax(c);
+      if (!(below.cwiseMax(above).cwiseMax(0.0).squaredNorm() < best_sq)) continue;
+      const ClosestPoint q = closest_point_on_triangle(p, a, b, c);
+      const double d_sq = (p - q.point).squaredNorm();
+      if (!(d_sq < best_sq)) continue;
+      best_sq = d_sq;
+      best_point = q.point;
+      best_normal = (b - a).cross(c - a);
+      reliable = !inverted;
+    }
+  }
+  return reliable;
+}
+
 // Level 5, one half of a cell pair: the surface vertices of cell_b against the triangles
-// with a vertex in cell_a, as the lattice is now. The deepest vertex behind its closest
-// triangle moves the cells apart, once per pair half as a plane moves a cell: a response
+// with a vertex in cell_a, as the lattice is now. A vertex is inside if it lies behind the
+// closest triangle of cell_a and of the cells around it, none of them inverted. The deepest
+// such vertex moves the cells apart, once per pair half as a plane moves a cell: a response
 // per vertex would push the same two cells dozens of times in one step and store the
 // pushes in the springs.
 template <bool kFriction>
@@ -204,7 +259,7 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
   if (tri_begin == tri_end) return;
   const Index vertex_begin = model.cell_vertex_begin[cell_b], vertex_end = model.cell_vertex_begin[cell_b + 1];
-  if (vertex_begin == vertex_end) return;
+  if (vertex_begin == vertex_end || cell_inverted(model, state, cell_a)) return;
   const double radius = model.surface_contact_radius;
   // The triangles' AABB widened by the radius: vertices outside it miss them all.
   Vec3 reach_lo, reach_hi;
@@ -279,12 +334,16 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
       best_point = q.point;
       best_normal = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
     }
-    // Behind the closest triangle's face: inside. Near a convex edge p - q lies between the
-    // faces' normals, so an outside vertex is never taken for an inside one.
-    const double normal_length = best_normal.norm();
-    if (!(normal_length > 0.0) || !((p - best_point).dot(best_normal) < 0.0)) continue;
+    if (!behind(p, best_point, best_normal) || !(best_sq > deepest * deepest)) continue;
+    // Behind the closest triangle of cell_a's patch; the surface's closest point may lie
+    // just past the patch's border, though, with p in front of it (a thin part of the
+    // object, a crease): look for it among the triangles of the cells around cell_a.
+    if (!closest_around(model, state, scratch, cell_a, cell_b, self, p, best_sq, best_point, best_normal) ||
+        !behind(p, best_point, best_normal))
+      continue;
     const double depth = std::sqrt(best_sq);
     if (!(depth > deepest)) continue;
+    const double normal_length = best_normal.norm();
     deepest = depth;
     deepest_point = p;
     deepest_normal = best_normal / normal_length;
@@ -297,10 +356,6 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   respond_pair<kFriction>(model, state, cell_a, cell_b, deepest_normal, deepest);
   invalidate_surface_around(model, scratch, cell_a);
   invalidate_surface_around(model, scratch, cell_b);
-}
-
-bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
-  return (model.cell_coord[cell_a] - model.cell_coord[cell_b]).cwiseAbs().maxCoeff() <= 1;
 }
 
 // Visits every pair of boxes whose hash-time AABBs overlap and that `wanted` accepts, once:

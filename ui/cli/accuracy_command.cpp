@@ -17,7 +17,7 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "accuracy", "What accuracy costs in time: each scene at every accuracy level (0 grid cells .. 5 exact "
                   "surfaces), collision time per step against gap and penetration on the exact surfaces");
-  cmd->add_option("scenes", o.scenes, "Scene files (default: the two teapots and the five soft bunnies)")
+  cmd->add_option("scenes", o.scenes, "Scene files (default: the two teapots and the five hard bunnies)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--steps", o.steps, "Steps per level (1 ms each); surfaces are sampled over the second half")
       ->check(CLI::Range(20, 1'000'000))
@@ -40,7 +40,7 @@ int run_accuracy_command(const AccuracyOptions& o) {
     std::vector<std::string> scenes = o.scenes;
     if (scenes.empty())
       scenes = {std::string(FFDSIM_SCENARIO_DIR) + "/scenes/two_teapots.toml",
-                std::string(FFDSIM_SCENARIO_DIR) + "/scenes/five_bunnies_soft.toml"};
+                std::string(FFDSIM_SCENARIO_DIR) + "/scenes/five_bunnies_hard.toml"};
     std::vector<int> levels = o.levels;
     if (levels.empty())
       for (int l = 0; l < ffd::kAccuracyLevels; ++l) levels.push_back(l);
