@@ -201,8 +201,10 @@ TEST_CASE("Physics loop: nothing is allocated on the physics thread") {
 // seconds and the ~2,000 releases behind it would all be late. The virtual machines this
 // runs on also stall a whole vCPU now and then (0.5-5 ms pauses, about one a second, seen by
 // a bare SCHED_FIFO spin loop too), and ctest runs another test on the other core; no code
-// can prevent that. So the bounds allow that noise (misses under 5 % of the steps, no step
-// more than 250 ms late) and nothing near what waiting would cause.
+// can prevent that: under a sanitizer with the other core busy, 13 % of the steps have been
+// seen late, 3 ms at most. So the bounds allow that noise (misses under a third of the
+// steps, no step more than 250 ms late) and nothing near what waiting would cause (two
+// thirds of the steps late, one by 2 s).
 TEST_CASE("Physics loop: a reader stalled for 2 s costs no deadline and no telemetry") {
   const Model model = test::compile_quietly(loop_scene());
   // The period and budget this build can keep: 1 ms, or 4x the slowest of 200 fast steps in
@@ -230,7 +232,7 @@ TEST_CASE("Physics loop: a reader stalled for 2 s costs no deadline and no telem
   CHECK(run.counters.telemetry_dropped == 0);
   CHECK(longest_compute_ns < 50'000'000);
   CHECK(latest_ns < 250'000'000);
-  CHECK(run.counters.deadline_misses * 20 < steps);
+  CHECK(run.counters.deadline_misses * 3 < steps);
 }
 
 TEST_CASE("Physics loop: a change of alpha at step k changes nothing before k") {
