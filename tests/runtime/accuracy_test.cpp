@@ -136,25 +136,26 @@ TEST_CASE("Accuracy: out-of-range levels are refused as commands") {
 
 namespace {
 
-// A slab squashed to a tenth of its height, so that its top and bottom faces lie in
-// neighbouring lattice layers closer together than the exact level's contact radius, and a
-// small box whose bottom face sits `height` above the slab's top face (negative: inside).
-struct SquashedSlab {
+// A slab whose lattice is scaled by `scale_y` in height (0.1: squashed, so that its top and
+// bottom faces lie in neighbouring lattice layers closer together than the exact level's
+// contact radius; -1: mirrored, every cell inside out), and a small box whose bottom face
+// sits `height` above the slab's top (negative: inside).
+struct ScaledSlab {
   Model model;
   State state;
   double slab_top = 0.0;  // m
 };
 
-SquashedSlab squashed_slab_under_box(double height) {
+ScaledSlab scaled_slab_under_box(double scale_y, double height) {
   SceneSpec spec;
   spec.settings.effects = static_cast<EffectSet>(Effect::InterCollision);
   spec.objects.push_back(box_object("slab", Vec3(0.2, 0.05, 0.2), 0.04, Vec3::Zero()));
   spec.objects.push_back(box_object("box", Vec3(0.06, 0.06, 0.06), 0.04, Vec3(0.0, 0.5, 0.0)));
-  SquashedSlab s{compile_quietly(spec), {}, 0.0};
+  ScaledSlab s{compile_quietly(spec), {}, 0.0};
   s.state = initial_state(s.model);
   const ObjectModel& slab = s.model.objects[0];
-  for (Index n = slab.node_begin; n < slab.node_end; ++n) s.state.x[n].y() *= 0.1;
-  s.slab_top = 0.1 * 0.025;
+  for (Index n = slab.node_begin; n < slab.node_end; ++n) s.state.x[n].y() *= scale_y;
+  s.slab_top = std::abs(scale_y) * 0.025;
   const ObjectModel& box = s.model.objects[1];
   const double shift = s.slab_top + height - (0.5 - 0.03);  // the box's bottom face starts at 0.47 m
   for (Index n = box.node_begin; n < box.node_end; ++n) s.state.x[n].y() += shift;
@@ -162,7 +163,7 @@ SquashedSlab squashed_slab_under_box(double height) {
 }
 
 // The exact level's narrow phase on `s` as the step runs it; returns the box's mean y motion.
-double exact_narrow_phase(SquashedSlab& s) {
+double exact_narrow_phase(ScaledSlab& s) {
   Scratch scratch = make_scratch(s.model);
   update_boxes(s.model, s.model.boxes, s.state, scratch);
   StageCounters counters;
@@ -180,10 +181,17 @@ double exact_narrow_phase(SquashedSlab& s) {
 }  // namespace
 
 TEST_CASE("Accuracy: the exact level takes a vertex above a thin slab for outside, though it lies behind the bottom face") {
-  SquashedSlab above = squashed_slab_under_box(0.001);  // m
+  ScaledSlab above = scaled_slab_under_box(0.1, 0.001);  // m
   REQUIRE(above.model.surface_contact_radius > 0.006);  // the bottom face is within reach of the box
   CHECK(exact_narrow_phase(above) == 0.0);
   // Control: 1 mm into the slab's top face, the box is pushed up, out of it.
-  SquashedSlab inside = squashed_slab_under_box(-0.001);
+  ScaledSlab inside = scaled_slab_under_box(0.1, -0.001);
   CHECK(exact_narrow_phase(inside) > 0.0);
+}
+
+TEST_CASE("Accuracy: the exact level ignores the surface of inverted cells") {
+  // Mirrored, the slab's top face carries the old bottom face's triangles, whose normals now
+  // point into the slab: a vertex 1 mm above it lies behind them.
+  ScaledSlab mirrored = scaled_slab_under_box(-1.0, 0.001);
+  CHECK(exact_narrow_phase(mirrored) == 0.0);
 }
