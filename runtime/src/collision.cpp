@@ -72,14 +72,18 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
   const std::array<Index, 8>& nodes_b = model.cell_nodes[cell_b];
   const double inv_a = model.cell_inv_mass[cell_a], inv_b = model.cell_inv_mass[cell_b];
   const Vec3 va = mean_velocity(state, nodes_a), vb = mean_velocity(state, nodes_b);
-  if ((vb - va).dot(n) < 0.0) {  // eq. 8 only while the cells approach
+  const double u = (vb - va).dot(n);
+  const PositionShares share = position_shares(inv_a, inv_b);
+  if (u < 0.0) {  // eq. 8 only while the cells approach
     const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
     const Vec3 v_ref = (ma * va + mb * vb) / (ma + mb);
     const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
-    for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta);
-    for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta);
+    const double bounce = rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt);
+    const Vec3 kick_a = -share.a * bounce * n, kick_b = share.b * bounce * n;
+    for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_a;
+    for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_b;
   }
-  const PositionShares share = position_shares(inv_a, inv_b);  // eq. 9
+  // Eq. 9: the position correction, split the same way.
   const Vec3 move_a = -share.a * r * n, move_b = share.b * r * n;
   for (Index i : nodes_a) state.x[i] += move_a;
   for (Index i : nodes_b) state.x[i] += move_b;
@@ -524,8 +528,10 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
       max_depth = std::max(max_depth, r);
       scratch.record_contact(deepest_point, plane.normal, r, ContactKind::Plane);
       const std::array<Index, 8>& nodes = model.cell_nodes[cell];
-      if (mean_velocity(state, nodes).dot(plane.normal) < 0.0) {
-        for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], Vec3::Zero(), plane.normal, alpha, beta);
+      const double u = mean_velocity(state, nodes).dot(plane.normal);
+      if (u < 0.0) {
+        const Vec3 kick = rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt) * plane.normal;
+        for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], Vec3::Zero(), plane.normal, alpha, beta) + kick;
       }
       const Vec3 move = r * plane.normal;  // the plane does not move: whole correction here
       for (Index i : nodes) state.x[i] += move;

@@ -38,13 +38,16 @@ void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3
   ProbeState& probe = state.probe;
   const double inv_cell = model.cell_inv_mass[cell], inv_probe = 1.0 / model.settings.probe.mass;
   const Vec3 v_cell = mean_velocity(state, nodes);
-  if ((probe.v - v_cell).dot(n) < 0.0) {  // approaching
+  const double u = (probe.v - v_cell).dot(n);
+  const PositionShares share = position_shares(inv_cell, inv_probe);
+  if (u < 0.0) {  // approaching
     const double m_cell = 1.0 / inv_cell, m_probe = model.settings.probe.mass;
     const Vec3 v_ref = (m_cell * v_cell + m_probe * probe.v) / (m_cell + m_probe);
-    for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], v_ref, n, state.params.alpha, beta);
-    probe.v = respond_velocity(probe.v, v_ref, n, state.params.alpha, beta);
+    const double alpha = state.params.alpha;
+    const double bounce = rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt);
+    for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) - share.a * bounce * n;
+    probe.v = respond_velocity(probe.v, v_ref, n, alpha, beta) + share.b * bounce * n;
   }
-  const PositionShares share = position_shares(inv_cell, inv_probe);
   for (Index i : nodes) state.x[i] -= share.a * r * n;
   probe.x += share.b * r * n;
 }

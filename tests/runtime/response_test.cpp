@@ -36,6 +36,23 @@ TEST_CASE("eq. 8 with alpha = 1 removes the normal component, beta the tangentia
   CHECK((respond_velocity(V, ref, n, 1.0, 0.3) - ref).dot(n) == Approx(0.0).margin(1e-15));
 }
 
+TEST_CASE("a fresh contact rebounds with restitution 1 - alpha, a lodged one does not", "[response]") {
+  const double recent = 0.002;  // s
+  const double u = -1.5;        // m/s, approaching
+  // Depth 1 mm: this approach made it within the last 0.7 ms.
+  CHECK(rebound(u, 0.001, 1.0, recent) == 0.0);         // alpha = 1: eq. 8 stopped it, no more
+  CHECK(rebound(u, 0.001, 0.0, recent) == Approx(3.0));  // elastic: -1.5 m/s becomes +1.5 m/s
+  CHECK(rebound(u, 0.001, 0.8, recent) == Approx(0.6));  // 0.2 x (1.5 + 1.5)
+  // After eq. 8 (1 - alpha) u is left; adding the rebound leaves -(1 - alpha) u.
+  for (double alpha : {0.0, 0.3, 0.8, 1.0})
+    CHECK((1.0 - alpha) * u + rebound(u, 0.001, alpha, recent) == Approx(-(1.0 - alpha) * u).margin(1e-15));
+  // 5 mm deep at 1.5 m/s: in for over 3 ms, the normal says nothing reliable: no rebound.
+  CHECK(rebound(u, 0.005, 0.0, recent) == 0.0);
+  // Separating or at rest: nothing to reverse.
+  CHECK(rebound(0.5, 0.001, 0.0, recent) == 0.0);
+  CHECK(rebound(0.0, 0.0, 0.0, recent) == 0.0);
+}
+
 TEST_CASE("eq. 9 splits the correction by inverse mass", "[response]") {
   const PositionShares equal = position_shares(2.0, 2.0);
   CHECK(equal.a == 0.5);

@@ -21,6 +21,22 @@ inline Vec3 respond_velocity(const Vec3& V, const Vec3& v_ref, const Vec3& n, do
   return v_ref + (1.0 - alpha) * normal_part + (1.0 - beta) * (relative - normal_part);
 }
 
+// The rebound that follows eq. 8: the pair's approach u (< 0, m/s, relative normal velocity
+// of the two sides' mean velocities) is reversed to -(1 - alpha) u, so alpha = 1 stops it
+// (as eq. 8 alone does), alpha = 0 is an elastic bounce and values between are a
+// coefficient of restitution 1 - alpha. Returns the change of relative normal velocity
+// (m/s, >= 0) to split between the two sides by position_shares (momentum is kept).
+// Why: eq. 8 alone keeps (1 - alpha) of the approach and eq. 9 moves the nodes without
+// touching it, so at small alpha a resting contact keeps the approach gravity adds every
+// step (g dt / alpha at rest; without bound at alpha = 0) and a pair meeting head on passes
+// through. Only a fresh contact rebounds: one whose depth r this approach made within the
+// last `recent` seconds. A node lodged deeper says nothing reliable about the contact's
+// normal, and reversing along a wrong one would throw it through the wall it is stuck in.
+inline double rebound(double u, double depth, double alpha, double recent) {
+  if (!(u < 0.0) || !(depth <= -u * recent)) return 0.0;
+  return -2.0 * (1.0 - alpha) * u;
+}
+
 // Eq. 9, generalised to unequal masses: A moves by -share_a * r * n, B by +share_b * r * n,
 // share = inverse mass / sum of inverse masses. Equal masses give the paper's r/2 each; a
 // static plane (inverse mass 0) puts the whole correction on the moving side.

@@ -114,7 +114,7 @@ const char* accuracy_name(Accuracy a);
 struct SimulationSettings {
   double dt = 0.001;                     // s, fixed step
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);  // m/s^2
-  double alpha = 0.5;                    // collision damping, eq. 8, [0, 1]
+  double alpha = 0.5;                    // collision damping, eq. 8, [0, 1]: 1 - restitution (response.h)
   double beta = 0.3;                     // friction, eq. 8, [0, 1]
   std::uint64_t seed = 1;                // for anything random a scene asks for
   EffectSet effects = 0;
