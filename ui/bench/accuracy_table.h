@@ -33,7 +33,7 @@ struct AccuracyRun {
   bool finite = true;
 };
 
-// The floating gap of the objects at rest (every lattice node slower than 5 cm/s), m: for
+// The floating gap of the objects at rest (RMS lattice-node speed below 5 cm/s), m: for
 // each, the distance to the nearest other surface or plane (0 where they penetrate, the
 // report's search radius where nothing is that near), and the widest of those. -1 when no
 // object is at rest. An object lying beside another without resting on it is nearest to what
