@@ -98,6 +98,7 @@ void apply_command(const Model& model, const State& initial, State& state, const
       std::copy(initial.v.begin(), initial.v.end(), state.v.begin());
       std::copy(initial.region_rotation.begin(), initial.region_rotation.end(), state.region_rotation.begin());
       std::copy(initial.spring_force.begin(), initial.spring_force.end(), state.spring_force.begin());
+      std::copy(initial.volume_pressure.begin(), initial.volume_pressure.end(), state.volume_pressure.begin());
       state.probe = initial.probe;
       state.grab = initial.grab;
       state.step = step;

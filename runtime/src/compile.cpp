@@ -109,6 +109,7 @@ void validate(const SceneSpec& spec) {
     if (o.dynamics == DynamicsKind::MassSpring) {
       require(std::isfinite(o.mass_spring.stiffness) && o.mass_spring.stiffness > 0.0, w + ".mass_spring.stiffness", "must be > 0 N/m");
       require(std::isfinite(o.mass_spring.damping) && o.mass_spring.damping >= 0.0, w + ".mass_spring.damping", "must be >= 0 N*s/m");
+      require(std::isfinite(o.mass_spring.bulk_modulus) && o.mass_spring.bulk_modulus >= 0.0, w + ".mass_spring.bulk_modulus", "must be >= 0 Pa");
       require(o.mass_spring.iterations >= 1 && o.mass_spring.iterations <= 100, w + ".mass_spring.iterations", "must be in 1..100");
     } else {
       require(o.shape_matching.stiffness > 0.0 && o.shape_matching.stiffness <= 1.0, w + ".shape_matching.stiffness", "must be in (0, 1]");
@@ -304,6 +305,29 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     }
     obj.spring_end = static_cast<Index>(model.springs.size());
 
+    // Volume constraints (mass-spring objects with a bulk modulus): the six tetrahedra of
+    // each cell's Kuhn split, around its diagonal from corner 0 to corner 7.
+    obj.tetrahedron_begin = static_cast<Index>(model.tetrahedra.size());
+    if (o.dynamics == DynamicsKind::MassSpring && o.mass_spring.bulk_modulus > 0.0) {
+      constexpr int kAxes[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};  // corner bits: x 1, y 2, z 4
+      for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
+        for (const auto& [first, second] : kAxes) {
+          const std::array<Index, 8>& corner = model.cell_nodes[c];
+          Tetrahedron t{{corner[0], corner[first], corner[first | second], corner[7]}, 0.0, 0.0};
+          const Vec3& x0 = model.node_rest[t.nodes[0]];
+          double volume = (model.node_rest[t.nodes[1]] - x0)
+                              .dot((model.node_rest[t.nodes[2]] - x0).cross(model.node_rest[t.nodes[3]] - x0)) / 6.0;
+          if (volume < 0.0) {  // the odd permutations: swap two corners
+            std::swap(t.nodes[1], t.nodes[2]);
+            volume = -volume;
+          }
+          t.rest_volume = volume;
+          t.compliance = volume / o.mass_spring.bulk_modulus;
+          model.tetrahedra.push_back(t);
+        }
+    }
+    obj.tetrahedron_end = static_cast<Index>(model.tetrahedra.size());
+
     // Shape-matching regions (FastLSM): around every node, the nodes within half-width w
     // (max-norm in lattice steps) reachable through cells of the object.
     obj.region_begin = static_cast<Index>(model.regions.size());
@@ -441,6 +465,7 @@ State initial_state(const Model& model) {
     }
   }
   state.spring_force.assign(model.springs.size(), 0.0);  // every spring starts at its rest length
+  state.volume_pressure.assign(model.tetrahedra.size(), 0.0);  // and every tetrahedron at its volume
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
   state.region_rotation.assign(model.regions.size(), Quat::Identity());
   for (const ObjectModel& o : model.objects)

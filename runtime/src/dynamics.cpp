@@ -19,6 +19,34 @@ void extract_rotation(const Mat3& A, Quat& q, int max_iterations) {
 
 namespace {
 
+// One XPBD projection of a tetrahedron's volume constraint C = V - V0 with compliance
+// V0 / K (so its energy is K (V - V0)^2 / 2 V0). V = d1 . (d2 x d3) / 6 with d_i = x_i - x0;
+// its gradient is (d2 x d3) / 6, (d3 x d1) / 6, (d1 x d2) / 6 and minus their sum for x0.
+// C is signed, so an inverted tetrahedron (V < 0) is pushed back through flat to upright,
+// where springs alone are as content with the mirror image.
+void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, double& lambda, State& state) {
+  Vec3& x0 = state.x[t.nodes[0]];
+  Vec3& x1 = state.x[t.nodes[1]];
+  Vec3& x2 = state.x[t.nodes[2]];
+  Vec3& x3 = state.x[t.nodes[3]];
+  const Vec3 d1 = x1 - x0, d2 = x2 - x0, d3 = x3 - x0;
+  const Vec3 g1 = d2.cross(d3) / 6.0, g2 = d3.cross(d1) / 6.0, g3 = d1.cross(d2) / 6.0;
+  const Vec3 g0 = -(g1 + g2 + g3);
+  const double w0 = model.node_inv_mass[t.nodes[0]], w1 = model.node_inv_mass[t.nodes[1]];
+  const double w2 = model.node_inv_mass[t.nodes[2]], w3 = model.node_inv_mass[t.nodes[3]];
+  const double alpha_tilde = t.compliance * inv_dt2;
+  const double denominator =
+      w0 * g0.squaredNorm() + w1 * g1.squaredNorm() + w2 * g2.squaredNorm() + w3 * g3.squaredNorm() + alpha_tilde;
+  if (!(denominator > 0.0)) return;  // all four corners in one point: no direction to push along
+  const double C = d1.dot(g1) - t.rest_volume;
+  const double dlambda = (-C - alpha_tilde * lambda) / denominator;
+  lambda += dlambda;
+  x0 += (w0 * dlambda) * g0;
+  x1 += (w1 * dlambda) * g1;
+  x2 += (w2 * dlambda) * g2;
+  x3 += (w3 * dlambda) * g3;
+}
+
 // XPBD (Macklin et al. 2016) on distance constraints with compliance 1/k and Rayleigh-like
 // constraint damping: implicit in effect, so stable for every stiffness at the fixed dt.
 // The stiffness is the object's live value in State::params, so it can be tuned between steps.
@@ -43,6 +71,7 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
     scratch.denominator_stiffness[object] = stiffness;
   }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
+  for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) scratch.tetrahedron_lambda[t] = 0.0;
   for (int it = 0; it < p.iterations; ++it) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
       const Spring& spring = model.springs[s];
@@ -60,11 +89,15 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
       xa += (wa * dlambda) * grad;
       xb -= (wb * dlambda) * grad;
     }
+    for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
+      project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), scratch.tetrahedron_lambda[t], state);
   }
   const double inv_dt = 1.0 / dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
   // The force each constraint applied this step, elastic and damping (XPBD: lambda / dt^2), N.
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = scratch.lambda[s] * inv_dt * inv_dt;
+  for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
+    state.volume_pressure[t] = scratch.tetrahedron_lambda[t] * inv_dt * inv_dt;
 }
 
 // Lattice shape matching (Rivers & James 2007, FastLSM, with Mueller et al. 2005

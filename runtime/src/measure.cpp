@@ -25,6 +25,9 @@ Energy compute_energy(const Model& model, const State& state) {
     const double stiffness = state.params.stiffness[i];
     for (Index s = o.spring_begin; s < o.spring_end; ++s)
       e.elastic += 0.5 * state.spring_force[s] * state.spring_force[s] / stiffness;
+    // Likewise the volume constraints: p^2 V0 / 2K, K (V - V0)^2 / 2 V0 where converged.
+    for (Index t = o.tetrahedron_begin; t < o.tetrahedron_end; ++t)
+      e.elastic += 0.5 * state.volume_pressure[t] * state.volume_pressure[t] * model.tetrahedra[t].compliance;
   }
   return e;
 }

@@ -54,6 +54,7 @@ Scratch make_scratch(const Model& model) {
   }
   s.x_prev.resize(model.node_count());
   s.lambda.resize(model.springs.size());
+  s.tetrahedron_lambda.resize(model.tetrahedra.size());
   s.spring_inv_denominator.resize(model.springs.size());
   s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());

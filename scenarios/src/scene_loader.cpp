@@ -48,7 +48,7 @@ const std::vector<std::string_view> kGroupOnlyKeys = {"count", "layout", "random
 const std::vector<std::string_view> kLayoutKeys = {"grid", "spacing", "centre"};
 const std::vector<std::string_view> kRandomKeys = {"velocity", "angular_velocity", "rotation"};
 const std::vector<std::string_view> kGlyphKeys = {"text", "font", "em_size", "depth", "sample_spacing"};
-const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations"};
+const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations", "bulk_modulus"};
 const std::vector<std::string_view> kShapeMatchingKeys = {"stiffness", "region_half_width", "damping"};
 const std::vector<std::string_view> kShapeNames = {"box", "sphere"};
 
@@ -514,6 +514,7 @@ class SceneReader {
       spec.mass_spring.damping = table.number("damping", spec.mass_spring.damping, kNonNegative);
       spec.mass_spring.iterations =
           static_cast<int>(table.integer("iterations", spec.mass_spring.iterations, 1, 100));
+      spec.mass_spring.bulk_modulus = table.number("bulk_modulus", spec.mass_spring.bulk_modulus, kNonNegative);
     } else if (shape_matching) {
       const TableReader table(origin_, *shape_matching, object.field("shape_matching"), kShapeMatchingKeys);
       spec.dynamics = DynamicsKind::ShapeMatching;

@@ -102,3 +102,88 @@ TEST_CASE("a free lattice keeps its momentum without gravity", "[dynamics]") {
   CHECK((momentum - Vec3(0.5, -0.2, 0.1)).norm() < 1e-9);
   CHECK(compute_energy(model, state).elastic < 1e-12);
 }
+
+namespace {
+
+// The signed volume of a lattice's cells, summed over their Kuhn tetrahedra (as compile
+// splits them) with each tetrahedron's sign taken from the rest shape, m^3: negative where
+// cells are inside out.
+double signed_lattice_volume(const Model& model, const State& state) {
+  auto volume = [](const std::vector<Vec3>& x, const std::array<Index, 4>& t) {
+    return (x[t[1]] - x[t[0]]).dot((x[t[2]] - x[t[0]]).cross(x[t[3]] - x[t[0]])) / 6.0;
+  };
+  double sum = 0.0;
+  for (const std::array<Index, 8>& corner : model.cell_nodes) {
+    constexpr int kAxes[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};
+    for (const auto& [first, second] : kAxes) {
+      const std::array<Index, 4> t = {corner[0], corner[first], corner[first | second], corner[7]};
+      sum += (volume(model.node_rest, t) > 0.0 ? 1.0 : -1.0) * volume(state.x, t);
+    }
+  }
+  return sum;
+}
+
+// A 2 x 1 x 2 cell box, no gravity, turned inside out: every node mirrored through the
+// box's middle plane y = 0, so every spring keeps its rest length. Returns the signed
+// volume after 1 s, m^3.
+double volume_after_inversion(double bulk_modulus, double& rest_volume, double& energy_at_start) {
+  SceneSpec spec;
+  spec.settings.effects = 0;
+  ObjectSpec box = test::box_object("box", Vec3(0.04, 0.02, 0.04), 0.02, Vec3::Zero());
+  box.mass_spring.stiffness = 2000.0;
+  box.mass_spring.bulk_modulus = bulk_modulus;
+  spec.objects.push_back(box);
+  const Model model = test::compile_quietly(spec);
+  State state = initial_state(model);
+  rest_volume = signed_lattice_volume(model, state);
+  const double middle = state.x[model.cell_nodes[0][0]].y() + 0.5 * (state.x[model.cell_nodes[0][7]].y() -
+                                                                     state.x[model.cell_nodes[0][0]].y());
+  for (Vec3& x : state.x) x.y() = 2.0 * middle - x.y();
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  step(model, state, scratch, report);
+  energy_at_start = compute_energy(model, state).elastic;
+  for (int i = 1; i < 1000; ++i) {
+    step(model, state, scratch, report);
+    REQUIRE(report.finite);
+  }
+  return signed_lattice_volume(model, state);
+}
+
+}  // namespace
+
+TEST_CASE("a cell turned inside out stays so with springs alone and recovers with a bulk modulus", "[dynamics]") {
+  double rest = 0.0, energy = 0.0;
+  const double springs_only = volume_after_inversion(0.0, rest, energy);
+  CHECK(rest >= 0.04 * 0.02 * 0.04);                       // the lattice holds the box
+  CHECK(springs_only == Approx(-rest).epsilon(1e-6));      // mirrored and content: every spring at rest
+  CHECK(energy < 1e-12);
+  const double with_volume = volume_after_inversion(2.0e5, rest, energy);  // 200 kPa
+  CHECK(with_volume == Approx(rest).epsilon(0.05));  // upright again
+  CHECK(energy > 0.0);                               // the inverted volume reads as elastic energy
+}
+
+TEST_CASE("a bulk modulus splits every cell into six upright tetrahedra that fill it", "[dynamics]") {
+  SceneSpec spec;
+  spec.settings.effects = 0;
+  ObjectSpec box = test::box_object("box", Vec3(0.04, 0.02, 0.04), 0.02, Vec3::Zero());
+  box.rotation_deg = Vec3(90.0, 0.0, 30.0);  // turned: the split is made in the rest frame
+  box.mass_spring.bulk_modulus = 1.0e5;      // Pa
+  spec.objects.push_back(box);
+  const Model model = test::compile_quietly(spec);
+  REQUIRE(model.tetrahedra.size() == 6 * model.cell_nodes.size());
+  const State state = initial_state(model);
+  for (Index c = 0; c < model.cell_nodes.size(); ++c) {
+    double volume = 0.0;  // m^3
+    for (int k = 0; k < 6; ++k) {
+      const Tetrahedron& t = model.tetrahedra[6 * c + k];
+      const Vec3& x0 = state.x[t.nodes[0]];
+      const double placed = (state.x[t.nodes[1]] - x0).dot((state.x[t.nodes[2]] - x0).cross(state.x[t.nodes[3]] - x0)) / 6.0;
+      CHECK(placed == Approx(t.rest_volume).epsilon(1e-9));  // upright where the scene puts it
+      CHECK(t.compliance == Approx(t.rest_volume / 1.0e5));
+      volume += t.rest_volume;
+    }
+    CHECK(volume == Approx(0.02 * 0.02 * 0.02).epsilon(1e-9));
+  }
+  CHECK(compute_energy(model, state).elastic == 0.0);
+}

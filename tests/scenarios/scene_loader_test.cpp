@@ -185,6 +185,7 @@ TEST_CASE("missing optional keys take their documented defaults", "[scene_loader
   CHECK(ball.mass_spring.stiffness == 5000.0);
   CHECK(ball.mass_spring.damping == 0.5);
   CHECK(ball.mass_spring.iterations == 4);
+  CHECK(ball.mass_spring.bulk_modulus == 0.0);  // springs only
   // subdivisions defaults to 3 and scale to 1.
   const ffd::SurfaceMesh expected = ffd::make_sphere_mesh(0.1, 3);
   CHECK(ball.mesh.vertices == expected.vertices);
@@ -399,6 +400,11 @@ TEST_CASE("scene value errors", "[scene_loader]") {
     require_error(scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [1, 1, 1]\n[object.mass_spring]\n"
                                     "iterations = 0\n"),
                   "inline.toml:8:14: object[0].mass_spring.iterations: must be in [1, 100] (got 0)");
+  }
+  SECTION("negative bulk modulus") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [1, 1, 1]\n[object.mass_spring]\n"
+                                    "bulk_modulus = -1e5\n"),
+                  "inline.toml:8:16: object[0].mass_spring.bulk_modulus: must be >= 0 (got -1e+05)");
   }
   SECTION("shape matching stiffness") {
     require_error(

@@ -43,6 +43,7 @@ struct ObjectModel {
   Index cell_begin = 0, cell_end = 0;      // range in Model::cell_*
   Index box_begin = 0, box_end = 0;        // range in Model::boxes
   Index spring_begin = 0, spring_end = 0;  // range in Model::springs
+  Index tetrahedron_begin = 0, tetrahedron_end = 0;  // range in Model::tetrahedra
   Index region_begin = 0, region_end = 0;  // range in Model::regions
   // The embedded surface: rest positions, and for every vertex its cell and local
   // coordinates (s, t, u) in [0, 1]^3 (eq. 1, divided by the cell size).
@@ -54,6 +55,14 @@ struct ObjectModel {
 struct Spring {
   Index a, b;          // global node indices
   double rest_length;  // m
+};
+
+// A volume constraint of a mass-spring cell (MassSpringParams::bulk_modulus): one of the six
+// tetrahedra of its Kuhn split, corners ordered so that the rest volume is positive.
+struct Tetrahedron {
+  std::array<Index, 4> nodes;  // global node indices
+  double rest_volume;          // m^3, > 0
+  double compliance;           // m^3/Pa: V0 / K, the XPBD compliance of C = V - V0
 };
 
 // A lattice shape-matching region (FastLSM): the nodes within half-width w of its centre.
@@ -132,6 +141,7 @@ struct Model {
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
 
   std::vector<Spring> springs;
+  std::vector<Tetrahedron> tetrahedra;
   std::vector<Region> regions;
   std::vector<Index> region_members;      // node indices
   std::vector<Index> node_region_count;   // regions containing each node

@@ -45,6 +45,10 @@ struct MassSpringParams {
   double stiffness = 5.0e3;  // N/m per spring; any value > 0 is stable (XPBD)
   double damping = 0.5;      // N*s/m along each spring
   int iterations = 4;        // Gauss-Seidel sweeps per step
+  // Pa; 0: springs only. Above 0, each cell's six tetrahedra also keep their signed volume
+  // (XPBD, compliance V0 / K each): springs alone hold a cell turned inside out as well as
+  // the upright one (a mirrored cell has every spring at its rest length).
+  double bulk_modulus = 0.0;
 };
 
 struct ShapeMatchingParams {

@@ -51,6 +51,8 @@ struct State {
   // multiplier (lambda / dt^2).
   // The elastic energy is read from it (measure.h); not part of the state hash (derived).
   std::vector<double> spring_force;
+  // (T) Pa: each volume constraint's pressure in the last step (lambda / dt^2), as above.
+  std::vector<double> volume_pressure;
   ProbeState probe;
   GrabState grab;
 };

@@ -71,6 +71,7 @@ struct Scratch {
   // Dynamics.
   std::vector<Vec3> x_prev;        // positions at the start of the step
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
+  std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
   // XPBD 1 / ((1 + gamma)(w_a + w_b) + alpha~) per spring, for the stiffness in
   // `denominator_stiffness` (per object): recomputed only when a command changes it.
   std::vector<double> spring_inv_denominator;
