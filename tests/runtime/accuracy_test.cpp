@@ -195,3 +195,16 @@ TEST_CASE("Accuracy: the exact level ignores the surface of inverted cells") {
   ScaledSlab mirrored = scaled_slab_under_box(-1.0, 0.001);
   CHECK(exact_narrow_phase(mirrored) == 0.0);
 }
+
+TEST_CASE("Accuracy: the exact level answers with eq. 8-9 alone, no rebound") {
+  // The box 1 mm into the slab, moving in at 1 m/s: a fresh contact, which the box levels
+  // would send back (response.h, rebound). At alpha = 0 and beta = 0 eq. 8 keeps every
+  // velocity, so the exact level must move the box out (eq. 9) and change no velocity.
+  ScaledSlab s = scaled_slab_under_box(1.0, -0.001);
+  s.state.params.alpha = 0.0;
+  const ObjectModel& box = s.model.objects[1];
+  for (Index n = box.node_begin; n < box.node_end; ++n) s.state.v[n] = Vec3(0.0, -1.0, 0.0);
+  const std::vector<Vec3> velocities = s.state.v;
+  CHECK(exact_narrow_phase(s) > 0.0);
+  CHECK(s.state.v == velocities);
+}
