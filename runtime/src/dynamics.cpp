@@ -34,10 +34,9 @@ void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, do
   const Vec3 g0 = -(g1 + g2 + g3);
   const double w0 = model.node_inv_mass[t.nodes[0]], w1 = model.node_inv_mass[t.nodes[1]];
   const double w2 = model.node_inv_mass[t.nodes[2]], w3 = model.node_inv_mass[t.nodes[3]];
-  const double alpha_tilde = t.compliance * inv_dt2;
+  const double alpha_tilde = t.compliance * inv_dt2;  // > 0: defined even for a flat tetrahedron
   const double denominator =
       w0 * g0.squaredNorm() + w1 * g1.squaredNorm() + w2 * g2.squaredNorm() + w3 * g3.squaredNorm() + alpha_tilde;
-  if (!(denominator > 0.0)) return;  // all four corners in one point: no direction to push along
   const double C = d1.dot(g1) - t.rest_volume;
   const double dlambda = (-C - alpha_tilde * lambda) / denominator;
   lambda += dlambda;
