@@ -4,12 +4,17 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <array>
 #include <assimp/Importer.hpp>
+#include <bit>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -110,36 +115,161 @@ SurfaceMesh read_obj_indexing(const std::string& path) {
   return mesh;
 }
 
-// The header of a PLY file, read strictly before assimp sees it: assimp's reader trusts it,
-// reading past the end of its buffer on a malformed one and looping for ever without
-// end_header, and allocates the entries its element lines declare before reading them (each
-// takes at least a byte of the file, so more than the file's size is a lie).
-void check_ply_header(const std::string& path, std::ifstream& file, std::uintmax_t file_bytes) {
-  static const std::vector<std::string_view> kTypes = {"char",  "uchar",  "short", "ushort",  "int",
-                                                       "uint",  "float",  "double", "int8",   "uint8",
-                                                       "int16", "uint16", "int32", "uint32",  "float32",
-                                                       "float64"};
-  static const std::vector<std::string_view> kFormats = {"ascii", "binary_little_endian", "binary_big_endian"};
-  const auto is_type = [](std::string_view t) { return std::find(kTypes.begin(), kTypes.end(), t) != kTypes.end(); };
-  std::string line;
-  std::size_t line_number = 1;  // the magic number's line was read
-  bool format_seen = false, element_seen = false;
-  constexpr std::size_t kMaxHeaderLine = 4096;
-  while (std::getline(file, line)) {
+// PLY is read here, not by assimp, whose reader trusts the file: it reads past its buffer on a
+// malformed header, loops for ever without end_header, and allocates the entries an element or
+// a list declares before reading them (2^31 corners for a face of a 300-byte file). The header
+// is read strictly (no element may declare more entries than the file has bytes), then the
+// body, ASCII or binary of either byte order, value by value. Of the elements, "vertex" gives
+// x, y, z and "face" its list "vertex_indices" (or "vertex_index"); others are read past.
+// Polygons are split into fans from their first corner; points and lines are skipped.
+struct PlyType {
+  std::string_view name;
+  int bytes;
+  bool is_float, is_signed;
+};
+const PlyType* ply_type(std::string_view name) {
+  static constexpr std::array<PlyType, 16> kTypes = {{{"char", 1, false, true},     {"uchar", 1, false, false},
+                                                      {"short", 2, false, true},    {"ushort", 2, false, false},
+                                                      {"int", 4, false, true},      {"uint", 4, false, false},
+                                                      {"float", 4, true, true},     {"double", 8, true, true},
+                                                      {"int8", 1, false, true},     {"uint8", 1, false, false},
+                                                      {"int16", 2, false, true},    {"uint16", 2, false, false},
+                                                      {"int32", 4, false, true},    {"uint32", 4, false, false},
+                                                      {"float32", 4, true, true},   {"float64", 8, true, true}}};
+  for (const PlyType& type : kTypes)
+    if (type.name == name) return &type;
+  return nullptr;
+}
+
+struct PlyProperty {
+  std::string name;
+  const PlyType* type;        // of the value, or of each item of a list
+  const PlyType* list_count;  // nullptr for a scalar
+};
+struct PlyElement {
+  std::string name;
+  std::size_t count;
+  std::vector<PlyProperty> properties;
+};
+enum class PlyFormat { ascii, binary_little_endian, binary_big_endian };
+
+// The values of a PLY body in file order, each read as a double (exact for every PLY type).
+class PlyBody {
+ public:
+  PlyBody(const std::string& path, std::string_view body, PlyFormat format, std::size_t first_line)
+      : path_(path), body_(body), format_(format), line_(first_line) {}
+
+  double next(const PlyType& type) { return format_ == PlyFormat::ascii ? next_text(type) : next_binary(type); }
+
+  // Where the last value was: a line for ASCII, a byte offset in the file for binary.
+  std::string where() const {
+    return format_ == PlyFormat::ascii ? "line " + std::to_string(value_line_) + ": "
+                                       : "byte " + std::to_string(header_bytes_ + value_offset_) + ": ";
+  }
+  void set_header_bytes(std::size_t bytes) { header_bytes_ = bytes; }
+
+ private:
+  double next_text(const PlyType& type) {
+    const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    while (offset_ < body_.size() && is_space(body_[offset_])) line_ += body_[offset_++] == '\n' ? 1 : 0;
+    value_line_ = line_;
+    if (offset_ == body_.size()) fail(path_, where() + "the file ends before the entries its header declares");
+    const std::size_t start = offset_;
+    while (offset_ < body_.size() && !is_space(body_[offset_])) ++offset_;
+    const std::string_view text = body_.substr(start, offset_ - start);
+    const auto parse = [&](auto& value) {
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (error != std::errc() || end != text.data() + text.size())
+        fail(path_, where() + "cannot read '" + std::string(text) + "' as a PLY " + std::string(type.name));
+    };
+    if (type.is_float && type.bytes == 4) {
+      float value = 0;  // rounded to the declared precision, as a binary file would hold it
+      parse(value);
+      return value;
+    }
+    if (type.is_float) {
+      double value = 0;
+      parse(value);
+      return value;
+    }
+    std::int64_t value = 0;
+    parse(value);
+    const std::int64_t bits = 8 * type.bytes;
+    const std::int64_t low = type.is_signed ? -(std::int64_t{1} << (bits - 1)) : 0;
+    const std::int64_t high = type.is_signed ? (std::int64_t{1} << (bits - 1)) - 1 : (std::int64_t{1} << bits) - 1;
+    if (value < low || value > high)
+      fail(path_, where() + "'" + std::string(text) + "' is out of range for a PLY " + std::string(type.name));
+    return static_cast<double>(value);
+  }
+
+  double next_binary(const PlyType& type) {
+    value_offset_ = offset_;
+    const auto size = static_cast<std::size_t>(type.bytes);
+    if (body_.size() - offset_ < size) fail(path_, where() + "the file ends before the entries its header declares");
+    std::array<unsigned char, 8> raw{};
+    std::memcpy(raw.data(), body_.data() + offset_, size);
+    offset_ += size;
+    const bool file_little = format_ == PlyFormat::binary_little_endian;
+    if (file_little != (std::endian::native == std::endian::little)) std::reverse(raw.begin(), raw.begin() + type.bytes);
+    const auto as = [&raw]<typename T>(T) {
+      T value;
+      std::memcpy(&value, raw.data(), sizeof(T));
+      return static_cast<double>(value);
+    };
+    switch (type.bytes) {
+      case 1: return type.is_signed ? as(std::int8_t{}) : as(std::uint8_t{});
+      case 2: return type.is_signed ? as(std::int16_t{}) : as(std::uint16_t{});
+      case 4: return type.is_float ? as(float{}) : type.is_signed ? as(std::int32_t{}) : as(std::uint32_t{});
+      default: return as(double{});
+    }
+  }
+
+  const std::string& path_;
+  std::string_view body_;
+  PlyFormat format_;
+  std::size_t offset_ = 0, line_, value_line_ = 0, value_offset_ = 0, header_bytes_ = 0;
+};
+
+SurfaceMesh read_ply(const std::string& path, std::uintmax_t file_bytes) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) fail(path, "cannot open the file");
+  std::string bytes(static_cast<std::size_t>(file_bytes), '\0');
+  if (!file.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+    fail(path, "cannot read the file's " + std::to_string(file_bytes) + " bytes");
+
+  // The header: "ply", "format ...", then element and property lines, up to "end_header".
+  std::size_t offset = 0, line_number = 0;
+  std::string_view line;
+  const auto next_line = [&]() {
+    if (offset >= bytes.size()) return false;
+    const std::size_t end = std::min(bytes.find('\n', offset), bytes.size());
+    line = std::string_view(bytes).substr(offset, end - offset);
+    offset = end + 1;
     ++line_number;
+    return true;
+  };
+  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  if (!next_line() || trim(line).size() != 3 || lower(trim(line)[0]) != 'p' || lower(trim(line)[1]) != 'l' ||
+      lower(trim(line)[2]) != 'y')
+    fail(path, "cannot read the mesh: the file does not start with the PLY magic number 'ply'");
+  std::optional<PlyFormat> format;
+  std::vector<PlyElement> elements;
+  constexpr std::size_t kMaxHeaderLine = 4096;
+  bool header_ended = false;
+  while (!header_ended && next_line()) {
     const std::string where = "line " + std::to_string(line_number) + " of the PLY header: ";
     if (line.size() > kMaxHeaderLine) fail(path, where + "the line is too long");
     const std::vector<std::string_view> tokens = tokens_of(trim(line));
     if (tokens.empty() || tokens[0] == "comment" || tokens[0] == "obj_info") continue;
     if (tokens[0] == "end_header") {
-      if (tokens.size() != 1 || !format_seen) fail(path, where + "end_header before a format line, or with words after it");
-      return;
-    }
-    if (tokens[0] == "format") {
-      if (tokens.size() != 3 || format_seen ||
-          std::find(kFormats.begin(), kFormats.end(), tokens[1]) == kFormats.end())
-        fail(path, where + "expected one 'format ascii|binary_little_endian|binary_big_endian 1.0'");
-      format_seen = true;
+      if (tokens.size() != 1 || !format) fail(path, where + "end_header before a format line, or with words after it");
+      header_ended = true;
+    } else if (tokens[0] == "format") {
+      if (tokens.size() != 3 || format) fail(path, where + "expected one 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      if (tokens[1] == "ascii") format = PlyFormat::ascii;
+      else if (tokens[1] == "binary_little_endian") format = PlyFormat::binary_little_endian;
+      else if (tokens[1] == "binary_big_endian") format = PlyFormat::binary_big_endian;
+      else fail(path, where + "expected one 'format ascii|binary_little_endian|binary_big_endian 1.0'");
     } else if (tokens[0] == "element") {
       if (tokens.size() != 3) fail(path, where + "expected 'element NAME COUNT'");
       std::uintmax_t count = 0;
@@ -150,19 +280,82 @@ void check_ply_header(const std::string& path, std::ifstream& file, std::uintmax
       if (error == std::errc::result_out_of_range || count > file_bytes)
         fail(path, where + "element '" + std::string(tokens[1]) + "' declares " + std::string(text) +
                        " entries, more than a file of " + std::to_string(file_bytes) + " bytes holds");
-      element_seen = true;
+      elements.push_back({std::string(tokens[1]), static_cast<std::size_t>(count), {}});
     } else if (tokens[0] == "property") {
-      const bool list = tokens.size() == 5 && tokens[1] == "list" && is_type(tokens[2]) && is_type(tokens[3]) &&
-                        tokens[2] != "float" && tokens[2] != "double" && tokens[2] != "float32" &&
-                        tokens[2] != "float64";
-      const bool scalar = tokens.size() == 3 && is_type(tokens[1]);
-      if (!element_seen || !(list || scalar))
+      const bool list = tokens.size() == 5 && tokens[1] == "list" && ply_type(tokens[2]) && ply_type(tokens[3]) &&
+                        !ply_type(tokens[2])->is_float;
+      const bool scalar = tokens.size() == 3 && ply_type(tokens[1]);
+      if (elements.empty() || !(list || scalar))
         fail(path, where + "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' after an element");
+      elements.back().properties.push_back(list ? PlyProperty{std::string(tokens[4]), ply_type(tokens[3]), ply_type(tokens[2])}
+                                                : PlyProperty{std::string(tokens[2]), ply_type(tokens[1]), nullptr});
     } else {
       fail(path, where + "unknown header line '" + std::string(tokens[0]) + "'");
     }
   }
-  fail(path, "cannot read the mesh: the PLY header has no end_header line");
+  if (!header_ended) fail(path, "cannot read the mesh: the PLY header has no end_header line");
+
+  // Which properties carry the mesh.
+  std::size_t vertex_count = 0;
+  for (const PlyElement& element : elements) {
+    if (element.name != "vertex") continue;
+    for (const char* axis : {"x", "y", "z"}) {
+      const auto property = std::find_if(element.properties.begin(), element.properties.end(),
+                                         [&](const PlyProperty& p) { return p.name == axis; });
+      if (property == element.properties.end() || property->list_count)
+        fail(path, std::string("the PLY element 'vertex' has no scalar property '") + axis + "'");
+    }
+    vertex_count = element.count;
+  }
+  if (vertex_count > kMaxMeshVertices)
+    fail(path, "the file has " + std::to_string(vertex_count) + " vertices, more than the limit of " +
+                   std::to_string(kMaxMeshVertices));
+
+  PlyBody body(path, std::string_view(bytes).substr(std::min(offset, bytes.size())), *format, line_number + 1);
+  body.set_header_bytes(std::min(offset, bytes.size()));
+  SurfaceMesh mesh;
+  mesh.vertices.reserve(vertex_count);
+  std::vector<Index> corners;
+  std::size_t face_number = 0;
+  for (const PlyElement& element : elements) {
+    const bool is_vertex = element.name == "vertex", is_face = element.name == "face";
+    for (std::size_t entry = 0; entry < element.count; ++entry) {
+      Vec3 position = Vec3::Zero();
+      corners.clear();
+      for (const PlyProperty& property : element.properties) {
+        if (!property.list_count) {
+          const double value = body.next(*property.type);
+          if (is_vertex && property.name.size() == 1 && property.name[0] >= 'x' && property.name[0] <= 'z')
+            position[property.name[0] - 'x'] = value;
+          continue;
+        }
+        const bool is_corners = is_face && (property.name == "vertex_indices" || property.name == "vertex_index");
+        const auto count = static_cast<std::int64_t>(body.next(*property.list_count));  // an integer type
+        if (count < 0) fail(path, body.where() + "a list of " + std::to_string(count) + " items");
+        // Nothing is reserved for the count: one the file does not hold fails at the file's end.
+        for (std::int64_t item = 0; item < count; ++item) {
+          const double index = body.next(*property.type);
+          if (!is_corners) continue;
+          if (!(index >= 0 && index < static_cast<double>(vertex_count) && index == std::floor(index))) {
+            std::array<char, 32> text{};
+            const auto printed = std::to_chars(text.data(), text.data() + text.size(), index);
+            fail(path, body.where() + "face " + std::to_string(face_number) + " refers to vertex " +
+                           std::string(text.data(), printed.ptr) + " of a mesh with " + std::to_string(vertex_count) +
+                           " vertices");
+          }
+          corners.push_back(static_cast<Index>(index));
+        }
+      }
+      if (is_vertex) mesh.vertices.push_back(position);
+      if (!is_face) continue;
+      if (mesh.triangles.size() + (corners.size() >= 3 ? corners.size() - 2 : 0) > kMaxMeshTriangles)
+        fail(path, body.where() + "more than the limit of " + std::to_string(kMaxMeshTriangles) + " triangles");
+      for (std::size_t k = 2; k < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k - 1], corners[k]});
+      ++face_number;
+    }
+  }
+  if (mesh.triangles.empty()) fail(path, "the file has no triangles (only points, lines or nothing)");
+  return mesh;
 }
 
 // OFF is read here, not by assimp, whose OFF reader reads out of bounds on malformed faces:
@@ -250,18 +443,6 @@ SurfaceMesh read_off(const std::string& path, std::uintmax_t file_bytes) {
   return mesh;
 }
 
-void check_header(const std::string& path, const std::string& extension, std::uintmax_t file_bytes) {
-  if (extension != ".ply") return;
-  std::ifstream file(path, std::ios::binary);
-  if (!file) fail(path, "cannot open the file");
-  // Without assimp's magic number ("ply" in any case) assimp rejects the file itself.
-  std::string line;
-  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
-  if (std::getline(file, line) && line.size() >= 3 && lower(line[0]) == 'p' && lower(line[1]) == 'l' &&
-      lower(line[2]) == 'y')
-    check_ply_header(path, file, file_bytes);
-}
-
 // What assimp's post-processing relies on, checked on the reader's output; each mesh's
 // primitive types are set from its faces (a reader may claim polygons it did not make). Also
 // the size limits, with polygons counted as the triangles they become.
@@ -332,7 +513,7 @@ SurfaceMesh import_mesh(const std::string& path) {
   }
   const std::string extension = lowercase_extension(path);
   if (extension == ".off") return read_off(path, file_bytes);
-  check_header(path, extension, file_bytes);
+  if (extension == ".ply") return read_ply(path, file_bytes);
 
   // No clean-up steps: no JoinIdenticalVertices (it welds with its own epsilon and drops
   // unreferenced vertices), no FindDegenerates, no validation fixes. clean_mesh() does the
