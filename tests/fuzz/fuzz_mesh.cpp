@@ -1,4 +1,5 @@
-// Mesh files through import_mesh() (assimp, plus the OBJ record reader) and clean_mesh().
+// Mesh files through import_mesh() (PLY and OFF readers of our own; OBJ and STL through assimp, OBJ
+// also through the record reader) and clean_mesh().
 // The importer takes a path and picks the format by extension, so the first byte of the
 // input picks the extension (its value mod 4: .obj, .ply, .stl, .off; the seeds start with
 // '0' to '3') and the rest is written to a file of this process's own temporary folder.

@@ -25,7 +25,7 @@ inline ffd::SceneLimits scene_limits() {
 }  // namespace ffd_fuzz
 
 // assimp 5.2's readers leak the mesh they were filling when they give up on a malformed
-// file (about 1 KB per file, e.g. its PLY reader on a bad number). That is assimp's, not
-// ours, and cannot be fixed here without patching the library, so LeakSanitizer ignores
-// leaks allocated inside it; leaks of our own code are still findings.
+// file (about 1 KB per file). That is assimp's, not ours, and cannot be fixed here without
+// patching the library, so LeakSanitizer ignores leaks allocated inside it; leaks of our own
+// code are still findings.
 extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }

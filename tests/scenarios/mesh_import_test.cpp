@@ -409,7 +409,7 @@ TEST_CASE("import_mesh rejects files and headers over its limits before reading 
     check_import_error(dir.write("endless.ply", ply_head + "4\nproperty float x\n"),
                        "the PLY header has no end_header line");
   }
-  SECTION("a PLY header with a line assimp would misread") {
+  SECTION("a PLY header with a malformed line") {
     check_import_error(dir.write("odd.ply", ply_head + "4\nproperty list float int vertex_indices\nend_header\n"),
                        "line 4 of the PLY header: expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE "
                        "NAME' after an element");
