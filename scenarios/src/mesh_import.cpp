@@ -156,8 +156,11 @@ enum class PlyFormat { ascii, binary_little_endian, binary_big_endian };
 // The values of a PLY body in file order, each read as a double (exact for every PLY type).
 class PlyBody {
  public:
-  PlyBody(const std::string& path, std::string_view body, PlyFormat format, std::size_t first_line)
-      : path_(path), body_(body), format_(format), line_(first_line) {}
+  // `body`: the file's bytes after its header, which takes `header_bytes` bytes and ends on
+  // line first_line - 1.
+  PlyBody(const std::string& path, std::string_view body, std::size_t header_bytes, PlyFormat format,
+          std::size_t first_line)
+      : path_(path), body_(body), format_(format), line_(first_line), header_bytes_(header_bytes) {}
 
   double next(const PlyType& type) { return format_ == PlyFormat::ascii ? next_text(type) : next_binary(type); }
 
@@ -166,7 +169,6 @@ class PlyBody {
     return format_ == PlyFormat::ascii ? "line " + std::to_string(value_line_) + ": "
                                        : "byte " + std::to_string(header_bytes_ + value_offset_) + ": ";
   }
-  void set_header_bytes(std::size_t bytes) { header_bytes_ = bytes; }
 
  private:
   double next_text(const PlyType& type) {
@@ -311,8 +313,8 @@ SurfaceMesh read_ply(const std::string& path, std::uintmax_t file_bytes) {
     fail(path, "the file has " + std::to_string(vertex_count) + " vertices, more than the limit of " +
                    std::to_string(kMaxMeshVertices));
 
-  PlyBody body(path, std::string_view(bytes).substr(std::min(offset, bytes.size())), *format, line_number + 1);
-  body.set_header_bytes(std::min(offset, bytes.size()));
+  const std::size_t header_bytes = std::min(offset, bytes.size());
+  PlyBody body(path, std::string_view(bytes).substr(header_bytes), header_bytes, *format, line_number + 1);
   SurfaceMesh mesh;
   mesh.vertices.reserve(vertex_count);
   std::vector<Index> corners;
