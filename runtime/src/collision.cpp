@@ -7,6 +7,7 @@
 #include "ffd/closest_point.h"
 #include "ffd/response.h"
 #include "ffd/trilinear.h"
+#include "sleep.h"
 
 namespace ffd {
 
@@ -72,18 +73,22 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
                   bool may_rebound = true) {
   const std::array<Index, 8>& nodes_a = model.cell_nodes[cell_a];
   const std::array<Index, 8>& nodes_b = model.cell_nodes[cell_b];
-  const double inv_a = model.cell_inv_mass[cell_a], inv_b = model.cell_inv_mass[cell_b];
+  // An object asleep is static here: infinite mass, velocity zero (sleep.h).
+  const bool static_a = state.asleep[model.cell_object[cell_a]], static_b = state.asleep[model.cell_object[cell_b]];
+  const double inv_a = static_a ? 0.0 : model.cell_inv_mass[cell_a], inv_b = static_b ? 0.0 : model.cell_inv_mass[cell_b];
   const Vec3 va = mean_velocity(state, nodes_a), vb = mean_velocity(state, nodes_b);
   const double u = (vb - va).dot(n);
   const PositionShares share = position_shares(inv_a, inv_b);
   if (u < 0.0) {  // eq. 8 only while the cells approach
     const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
-    const Vec3 v_ref = (ma * va + mb * vb) / (ma + mb);
+    const Vec3 v_ref = static_a ? va : static_b ? vb : Vec3((ma * va + mb * vb) / (ma + mb));
     const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
     const double bounce = may_rebound ? rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt) : 0.0;
     const Vec3 kick_a = -share.a * bounce * n, kick_b = share.b * bounce * n;
-    for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_a;
-    for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_b;
+    if (!static_a)
+      for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_a;
+    if (!static_b)
+      for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_b;
   }
   // Eq. 9: the position correction, split the same way.
   const Vec3 move_a = -share.a * r * n, move_b = share.b * r * n;
@@ -413,9 +418,10 @@ bool build_spatial_hash(const Model& model, std::size_t box_count, double margin
       lo = lo.cwiseMin(nodes[k]);
       hi = hi.cwiseMax(nodes[k]);
     }
-    if (margin > 0.0) {
-      lo -= Vec3::Constant(margin);
-      hi += Vec3::Constant(margin);
+    const double grow = margin + (scratch.box_wake_margin.empty() ? 0.0 : scratch.box_wake_margin[b]);
+    if (grow > 0.0) {
+      lo -= Vec3::Constant(grow);
+      hi += Vec3::Constant(grow);
     }
     scratch.box_min[b] = lo;
     scratch.box_max[b] = hi;
@@ -457,13 +463,15 @@ namespace {
 
 // Pairs the narrow phase wants: boxes of different objects with inter-collision on; boxes of
 // one object with self-collision on whose cells share no lattice node (those touch by
-// construction).
-auto wanted_pairs(const Model& model, const BoxSet& boxes) {
+// construction); never two boxes of objects asleep.
+auto wanted_pairs(const Model& model, const BoxSet& boxes, const State& state) {
   const bool inter = has(model.settings.effects, Effect::InterCollision);
   const bool self = has(model.settings.effects, Effect::SelfCollision);
-  return [&model, &boxes, inter, self](Index b1, Index b2) {
+  return [&model, &boxes, &state, inter, self](Index b1, Index b2) {
     const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
-    if (model.cell_object[c1] != model.cell_object[c2]) return inter;
+    const Index o1 = model.cell_object[c1], o2 = model.cell_object[c2];
+    if (state.asleep[o1] && state.asleep[o2]) return false;
+    if (o1 != o2) return inter;
     return self && !cells_share_node(model, c1, c2);
   };
 }
@@ -474,8 +482,10 @@ template <bool kFriction>
 void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
                    double& max_depth) {
   const BoxSet& boxes = *level.boxes;
-  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes), [&](Index b1, Index b2) {
-    const bool same_object = model.cell_object[boxes.box_cell[b1]] == model.cell_object[boxes.box_cell[b2]];
+  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
+    const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
+    if (sleeping(model) && !meet(state, object_1, object_2)) return;
+    const bool same_object = object_1 == object_2;
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
     ensure_box(model, boxes, state, scratch, b1, counters);
@@ -490,8 +500,9 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
   const BoxSet& boxes = model.boxes;
   std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
   scratch.surface_step_epoch = ++scratch.surface_epoch;
-  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes), [&](Index b1, Index b2) {
+  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
     const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
+    if (sleeping(model) && !meet(state, model.cell_object[c1], model.cell_object[c2])) return;
     const bool same_object = model.cell_object[c1] == model.cell_object[c2];
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
@@ -508,8 +519,9 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
   const int node_count = tested_node_count(level);
   for (const PlaneModel& plane : model.planes) {
     for (Index b = 0; b < boxes.size(); ++b) {
-      ensure_box(model, boxes, state, scratch, b, counters);
       const Index cell = boxes.box_cell[b];
+      if (state.asleep[model.cell_object[cell]]) continue;  // frozen where it rests
+      ensure_box(model, boxes, state, scratch, b, counters);
       double deepest = 0.0;
       Vec3 deepest_point = Vec3::Zero();
       auto consider = [&](const Vec3& p) {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "ffd/trilinear.h"
+#include "sleep.h"
 
 namespace ffd {
 
@@ -81,8 +82,15 @@ void apply_command(const Model& model, const State& initial, State& state, const
       break;
     case CommandKind::SetAlpha: state.params.alpha = c.value; break;
     case CommandKind::SetBeta: state.params.beta = c.value; break;
-    case CommandKind::SetGravity: state.params.gravity = c.vector; break;
-    case CommandKind::SetStiffness: state.params.stiffness[c.object] = c.value; break;
+    // Changing the physics of an object asleep wakes it (sleep.h).
+    case CommandKind::SetGravity:
+      state.params.gravity = c.vector;
+      wake_all(state);
+      break;
+    case CommandKind::SetStiffness:
+      state.params.stiffness[c.object] = c.value;
+      wake(state, c.object);
+      break;
     case CommandKind::SetProbeStiffness: state.params.probe_stiffness = c.value; break;
     case CommandKind::SetAccuracy: state.params.accuracy = static_cast<Accuracy>(static_cast<int>(c.value)); break;
     case CommandKind::Reset: {
@@ -99,6 +107,10 @@ void apply_command(const Model& model, const State& initial, State& state, const
       std::copy(initial.region_rotation.begin(), initial.region_rotation.end(), state.region_rotation.begin());
       std::copy(initial.spring_force.begin(), initial.spring_force.end(), state.spring_force.begin());
       std::copy(initial.volume_pressure.begin(), initial.volume_pressure.end(), state.volume_pressure.begin());
+      std::copy(initial.asleep.begin(), initial.asleep.end(), state.asleep.begin());
+      std::copy(initial.still_steps.begin(), initial.still_steps.end(), state.still_steps.begin());
+      std::copy(initial.moving.begin(), initial.moving.end(), state.moving.begin());
+      std::copy(initial.rest_anchor.begin(), initial.rest_anchor.end(), state.rest_anchor.begin());
       state.probe = initial.probe;
       state.grab = initial.grab;
       state.step = step;

@@ -97,6 +97,10 @@ void validate(const SceneSpec& spec) {
   require(s.min_box_thickness >= 0.0 && s.min_box_thickness <= 1.0, "simulation.min_box_thickness", "must be in [0, 1]");
   require(static_cast<int>(s.accuracy) < kAccuracyLevels, "simulation.accuracy", "must be in 0..5");
   require(s.sub_box_split >= 2 && s.sub_box_split <= 4, "simulation.sub_box_split", "must be in 2..4");
+  require(std::isfinite(s.sleep_radius) && s.sleep_radius > 0.0 && s.sleep_radius <= 1.0, "simulation.sleep_radius",
+          "must be in (0, 1] m (got " + fmt(s.sleep_radius) + ")");
+  require(std::isfinite(s.sleep_time) && s.sleep_time > 0.0 && s.sleep_time <= 60.0, "simulation.sleep_time",
+          "must be in (0, 60] s (got " + fmt(s.sleep_time) + ")");
   for (std::size_t i = 0; i < spec.objects.size(); ++i) {
     const ObjectSpec& o = spec.objects[i];
     const std::string w = "object '" + o.name + "'";
@@ -431,6 +435,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   }
   if (planes) model.pipeline.push_back(Stage::Planes);
   if (probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::Interaction);
+  if (has(effects, Effect::Sleeping)) model.pipeline.push_back(Stage::Sleep);
   return model;
 }
 
@@ -465,6 +470,10 @@ State initial_state(const Model& model) {
     }
   }
   state.spring_force.assign(model.springs.size(), 0.0);  // every spring starts at its rest length
+  state.asleep.assign(model.objects.size(), 0);
+  state.still_steps.assign(model.objects.size(), 0);
+  state.moving.assign(model.objects.size(), 0);
+  state.rest_anchor.assign(model.objects.size(), Vec3::Constant(INFINITY));  // moves at the first step
   state.volume_pressure.assign(model.tetrahedra.size(), 0.0);  // and every tetrahedron at its volume
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
   state.region_rotation.assign(model.regions.size(), Quat::Identity());

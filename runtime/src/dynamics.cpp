@@ -140,6 +140,7 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
 
 void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    if (state.asleep[i]) continue;  // frozen (sleep.h)
     const ObjectModel& obj = model.objects[i];
     const double stiffness = state.params.stiffness[i];
     if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, scratch);

@@ -14,6 +14,7 @@ const char* effect_name(Effect e) {
     case Effect::Friction: return "friction";
     case Effect::Probe: return "probe";
     case Effect::Grab: return "grab";
+    case Effect::Sleeping: return "sleeping";
   }
   return "?";
 }
@@ -49,6 +50,7 @@ const char* stage_name(Stage s) {
     case Stage::NarrowPhase: return "narrow_phase";
     case Stage::Planes: return "planes";
     case Stage::Interaction: return "interaction";
+    case Stage::Sleep: return "sleep";
     case Stage::Count: break;
   }
   return "?";

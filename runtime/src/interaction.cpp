@@ -7,6 +7,7 @@
 #include "ffd/box_test.h"
 #include "ffd/response.h"
 #include "ffd/trilinear.h"
+#include "sleep.h"
 
 namespace ffd {
 
@@ -34,6 +35,7 @@ namespace {
 // velocities along n are damped by alpha (eq. 8) relative to their mass-weighted mean, and
 // the depth r is split by inverse mass (eq. 9).
 void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3& n, double r, double beta) {
+  wake(state, model.cell_object[cell]);
   const std::array<Index, 8>& nodes = model.cell_nodes[cell];
   ProbeState& probe = state.probe;
   const double inv_cell = model.cell_inv_mass[cell], inv_probe = 1.0 / model.settings.probe.mass;
@@ -125,6 +127,7 @@ void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& 
 // the point's velocity changes by exactly the solved amount.
 void step_grab(const Model& model, State& state) {
   GrabState& grab = state.grab;
+  wake(state, model.cell_object[grab.cell]);
   const std::array<Index, 8>& nodes = model.cell_nodes[grab.cell];
   const std::array<double, 8> w = trilinear_weights(grab.local);
   Vec3 point = Vec3::Zero(), velocity = Vec3::Zero();

@@ -9,6 +9,7 @@
 #include "dynamics.h"
 #include "collision.h"
 #include "interaction.h"
+#include "sleep.h"
 
 namespace ffd {
 
@@ -25,6 +26,11 @@ std::int64_t now_ns() {
 
 void apply_gravity(const Model& model, State& state) {
   const Vec3 dv = state.params.gravity * model.settings.dt;
+  if (sleeping(model)) {
+    for (std::size_t n = 0; n < state.v.size(); ++n)
+      if (!state.asleep[model.node_object[n]]) state.v[n] += dv;
+    return;
+  }
   for (std::size_t n = 0; n < state.v.size(); ++n) state.v[n] += dv;
 }
 
@@ -44,6 +50,7 @@ Scratch make_scratch(const Model& model) {
   s.box_valid.assign(boxes, 0);
   s.box_min.resize(boxes);
   s.box_max.resize(boxes);
+  if (sleeping(model)) s.box_wake_margin.assign(boxes, 0.0);
   if (model.hash_table_size > 0) {
     s.bucket_begin.assign(std::max(model.hash_table_size, model.sub_box_hash_table_size) + 1, 0);
     // A box no larger than a hash cell touches at most 8 of them.
@@ -119,6 +126,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::BroadPhase: {
         // The exact level pairs cells whose boxes come within its contact radius.
         const double margin = level.exact ? model.surface_contact_radius : 0.0;
+        if (sleeping(model)) set_wake_margins(model, *level.boxes, state, scratch);
         report.hash_overflow =
             !build_spatial_hash(model, level.boxes->size(), margin, level.hash_table_size, scratch, counters);
         break;
@@ -141,6 +149,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::Interaction:
         interact(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
         break;
+      case Stage::Sleep: update_sleep(model, state); break;
       case Stage::Count: break;
     }
     report.stage_ns[static_cast<std::size_t>(stage)] = now_ns() - t0;

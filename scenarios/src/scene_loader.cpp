@@ -35,7 +35,8 @@ const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_st
 const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
-    "effects", "hash_table_size", "hash_cell_size", "min_box_thickness", "accuracy", "sub_box_split"};
+    "effects", "hash_table_size", "hash_cell_size", "min_box_thickness", "accuracy", "sub_box_split",
+    "sleep_radius", "sleep_time"};
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
     "name",         "mesh",          "shape",          "glyph",          "size",
@@ -121,6 +122,12 @@ class SceneReader {
         sim.integer("accuracy", static_cast<int>(settings.accuracy), 0, kAccuracyLevels - 1));
     settings.sub_box_split = static_cast<int>(sim.integer("sub_box_split", settings.sub_box_split, 2, 4));
     settings.effects = read_effects(sim);
+    // The sleeping effect's settings, only with it on: a value that would change nothing is a mistake.
+    for (const char* key : {"sleep_radius", "sleep_time"})
+      if (sim.has(key) && !has(settings.effects, Effect::Sleeping))
+        sim.fail_at(key, std::string(key) + " is given but the \"sleeping\" effect is off; add \"sleeping\" to simulation.effects");
+    settings.sleep_radius = sim.number("sleep_radius", settings.sleep_radius, Bounds{0.0, 1.0, true, false});
+    settings.sleep_time = sim.number("sleep_time", settings.sleep_time, Bounds{0.0, 60.0, true, false});
     return settings;
   }
 

@@ -263,7 +263,7 @@ TEST_CASE("malformed scene files name the file, line, column and field", "[scene
   SECTION("unknown effect") {
     require_fixture_error("bad_effect.toml",
                           ":3:23: simulation.effects[1]: unknown effect 'frction'; did you mean 'friction'? "
-                          "(valid effects: gravity, planes, inter_collision, self_collision, friction, probe, grab)");
+                          "(valid effects: gravity, planes, inter_collision, self_collision, friction, probe, grab, sleeping)");
   }
   SECTION("duplicate object name") {
     require_fixture_error("bad_duplicate_name.toml",
@@ -333,13 +333,13 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
     require_error(
         "[simulation]\neffects = []\nwind = 3\n",
         "inline.toml:3:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time)");
   }
   SECTION("the first unknown key in file order is reported") {
     require_error(
         "[simulation]\nwind = 1\neffects = []\nalpha_ = 1\n",
         "inline.toml:2:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time)");
   }
   SECTION("a key that is the start of a valid one") {
     require_error(scene_with_object("name = \"a\"\nrotation = [0, 45, 0]\n"),
@@ -500,6 +500,23 @@ TEST_CASE("probe and grab tables are read, and only with their effects", "[scene
                 "inline.toml:4:10: probe.radius: must be > 0 (got -1)");
   require_error("[simulation]\neffects = [\"grab\"]\n[grab]\nstifness = 1.0\n[[object]]\n" + kBoxLines,
                 "inline.toml:4:1: grab.stifness: unknown key 'stifness'; did you mean 'stiffness'?");
+}
+
+TEST_CASE("sleep_radius and sleep_time are read, and only with the sleeping effect", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(
+      "[simulation]\neffects = [\"gravity\", \"sleeping\"]\nsleep_radius = 0.004\nsleep_time = 1.5\n[[object]]\n" +
+      kBoxLines);
+  CHECK(ffd::has(scene.settings.effects, ffd::Effect::Sleeping));
+  CHECK(scene.settings.sleep_radius == 0.004);
+  CHECK(scene.settings.sleep_time == 1.5);
+  const ffd::SceneSpec defaults = parse("[simulation]\neffects = [\"sleeping\"]\n[[object]]\n" + kBoxLines);
+  CHECK(defaults.settings.sleep_radius == 0.002);
+  CHECK(defaults.settings.sleep_time == 0.3);
+  require_error("[simulation]\neffects = [\"gravity\"]\nsleep_time = 1.0\n[[object]]\n" + kBoxLines,
+                "inline.toml:3:14: simulation.sleep_time: sleep_time is given but the \"sleeping\" effect is off; "
+                "add \"sleeping\" to simulation.effects");
+  require_error("[simulation]\neffects = [\"sleeping\"]\nsleep_radius = 0.0\n[[object]]\n" + kBoxLines,
+                "inline.toml:3:16: simulation.sleep_radius: must be in (0, 1] (got 0)");
 }
 
 // --- [[group]]: count copies on a grid with seeded random velocities, spins and rotations.

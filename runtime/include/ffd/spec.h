@@ -19,6 +19,7 @@ enum class Effect : std::uint32_t {
   Friction = 1u << 4,        // tangential term of eq. 8 (beta); without it beta is unused
   Probe = 1u << 5,           // haptic probe: a sphere proxy coupled to the device pose
   Grab = 1u << 6,            // grab: a picked point of an object pulled towards a target
+  Sleeping = 1u << 7,        // objects at rest freeze until something moves against them
 };
 using EffectSet = std::uint32_t;
 inline constexpr bool has(EffectSet set, Effect e) { return (set & static_cast<std::uint32_t>(e)) != 0; }
@@ -34,7 +35,7 @@ const char* effect_name(Effect e);
 bool effect_from_name(const std::string& name, Effect& out);
 inline constexpr Effect kAllEffects[] = {Effect::Gravity,       Effect::Planes,   Effect::InterCollision,
                                          Effect::SelfCollision, Effect::Friction, Effect::Probe,
-                                         Effect::Grab};
+                                         Effect::Grab,          Effect::Sleeping};
 
 enum class DynamicsKind : std::uint8_t {
   MassSpring,     // edge, face- and body-diagonal springs, XPBD compliant constraints
@@ -128,6 +129,10 @@ struct SimulationSettings {
   Accuracy accuracy = Accuracy::CentreOfMass;  // starting level; commands may switch it
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect
+  // Used with the "sleeping" effect: an object whose centre of mass has stayed within
+  // sleep_radius of one point for sleep_time falls asleep (runtime/src/sleep.h).
+  double sleep_radius = 0.002;           // m
+  double sleep_time = 0.3;               // s
   GrabSettings grab;                     // used with the "grab" effect
 };
 

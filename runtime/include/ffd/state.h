@@ -55,6 +55,12 @@ struct State {
   std::vector<double> volume_pressure;
   ProbeState probe;
   GrabState grab;
+  // The "sleeping" effect, per object (O): an object asleep is frozen (v = 0), takes no
+  // dynamics, and collides as a static body until something moving touches it (sleep.cpp).
+  std::vector<std::uint8_t> asleep;
+  std::vector<std::uint32_t> still_steps;  // steps its centre of mass has stayed near rest_anchor
+  std::vector<Vec3> rest_anchor;           // m, where its centre of mass was when it last moved
+  std::vector<std::uint8_t> moving;        // it left its anchor at the last Sleep stage, fast enough to wake others
 };
 
 // FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,

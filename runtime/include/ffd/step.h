@@ -57,6 +57,9 @@ struct Scratch {
   std::vector<std::array<Vec3, 9>> box_nodes;
   std::vector<std::uint8_t> box_valid;
   std::vector<Vec3> box_min, box_max;  // world AABB of each box's nodes at hash time
+  // Sleeping only (else empty): how far (m) each box reaches beyond its nodes in the hash,
+  // so that an object moving wakes a sleeper before it touches it (sleep.h).
+  std::vector<double> box_wake_margin;
   // Spatial hash as counting-sorted arrays: bucket b holds entries[bucket_begin[b] ..
   // bucket_begin[b + 1]).
   struct HashEntry {

@@ -1,0 +1,71 @@
+#include "sleep.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ffd {
+
+namespace {
+
+Vec3 centre_of_mass(const Model& model, const State& state, const ObjectModel& o) {
+  Vec3 sum = Vec3::Zero();
+  double mass = 0.0;
+  for (Index n = o.node_begin; n < o.node_end; ++n) {
+    sum += model.node_mass[n] * state.x[n];
+    mass += model.node_mass[n];
+  }
+  return sum / mass;
+}
+
+}  // namespace
+
+void wake(State& state, Index object) {
+  if (!state.asleep[object]) return;
+  state.asleep[object] = 0;
+  state.still_steps[object] = 1;
+}
+
+void wake_all(State& state) {
+  for (Index o = 0; o < state.asleep.size(); ++o) wake(state, o);
+}
+
+bool meet(State& state, Index object_a, Index object_b) {
+  const bool asleep_a = state.asleep[object_a], asleep_b = state.asleep[object_b];
+  if (asleep_a && asleep_b) return false;
+  if (asleep_a && state.moving[object_b]) wake(state, object_a);
+  if (asleep_b && state.moving[object_a]) wake(state, object_b);
+  return true;
+}
+
+void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch) {
+  const double reach = 2.0 * model.settings.sleep_radius;
+  for (Index b = 0; b < boxes.size(); ++b) {
+    const Index o = model.cell_object[boxes.box_cell[b]];
+    scratch.box_wake_margin[b] = state.moving[o] ? reach : 0.0;
+  }
+}
+
+void update_sleep(const Model& model, State& state) {
+  const auto sleep_steps =
+      static_cast<std::uint32_t>(std::max(1.0, std::ceil(model.settings.sleep_time / model.settings.dt)));
+  for (Index o = 0; o < model.objects.size(); ++o) {
+    if (state.asleep[o]) continue;
+    const ObjectModel& object = model.objects[o];
+    const Vec3 centre = centre_of_mass(model, state, object);
+    if (!((centre - state.rest_anchor[o]).norm() <= model.settings.sleep_radius)) {
+      // Fast enough to wake others: it left the anchor within half of sleep_time, faster than
+      // 2 sleep_radius / sleep_time (6.7 mm/s by default). Slower drift in a trembling pile
+      // would otherwise wake the neighbours, and theirs, and keep a pile from ever sleeping.
+      state.moving[o] = state.still_steps[o] < sleep_steps / 2;
+      state.rest_anchor[o] = centre;
+      state.still_steps[o] = 0;
+      continue;
+    }
+    state.moving[o] = 0;
+    if (++state.still_steps[o] < sleep_steps) continue;
+    state.asleep[o] = 1;
+    for (Index n = object.node_begin; n < object.node_end; ++n) state.v[n] = Vec3::Zero();
+  }
+}
+
+}  // namespace ffd
