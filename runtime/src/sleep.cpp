@@ -46,8 +46,9 @@ void set_wake_margins(const Model& model, const BoxSet& boxes, const State& stat
 }
 
 void update_sleep(const Model& model, State& state) {
+  // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
   const auto sleep_steps =
-      static_cast<std::uint32_t>(std::max(1.0, std::ceil(model.settings.sleep_time / model.settings.dt)));
+      static_cast<std::uint32_t>(std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
   for (Index o = 0; o < model.objects.size(); ++o) {
     if (state.asleep[o]) continue;
     const ObjectModel& object = model.objects[o];
