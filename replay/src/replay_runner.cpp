@@ -46,16 +46,7 @@ std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
 // Mass-weighted centre of each object's lattice nodes.
 void centres_of_mass(const Model& model, const std::vector<Vec3>& x, std::vector<Vec3>& out) {
   out.resize(model.objects.size());
-  for (std::size_t i = 0; i < model.objects.size(); ++i) {
-    const ObjectModel& o = model.objects[i];
-    Vec3 sum = Vec3::Zero();
-    double mass = 0.0;
-    for (Index n = o.node_begin; n < o.node_end; ++n) {
-      sum += model.node_mass[n] * x[n];
-      mass += model.node_mass[n];
-    }
-    out[i] = sum / mass;
-  }
+  for (Index i = 0; i < model.objects.size(); ++i) out[i] = centre_of_mass(model, x, i);
 }
 
 std::string vector_text(const Vec3& v) {

@@ -5,20 +5,6 @@
 
 namespace ffd {
 
-namespace {
-
-Vec3 centre_of_mass(const Model& model, const State& state, const ObjectModel& o) {
-  Vec3 sum = Vec3::Zero();
-  double mass = 0.0;
-  for (Index n = o.node_begin; n < o.node_end; ++n) {
-    sum += model.node_mass[n] * state.x[n];
-    mass += model.node_mass[n];
-  }
-  return sum / mass;
-}
-
-}  // namespace
-
 void wake(State& state, Index object) {
   if (!state.asleep[object]) return;
   state.asleep[object] = 0;
@@ -52,7 +38,7 @@ void update_sleep(const Model& model, State& state) {
   for (Index o = 0; o < model.objects.size(); ++o) {
     if (state.asleep[o]) continue;
     const ObjectModel& object = model.objects[o];
-    const Vec3 centre = centre_of_mass(model, state, object);
+    const Vec3 centre = centre_of_mass(model, state.x, o);
     if (!((centre - state.rest_anchor[o]).norm() <= model.settings.sleep_radius)) {
       // Fast enough to wake others: it left the anchor within half of sleep_time, faster than
       // 2 sleep_radius / sleep_time (6.7 mm/s by default). Slower drift in a trembling pile

@@ -28,17 +28,6 @@ SceneSpec resting_scene(bool with_slider) {
   return spec;
 }
 
-Vec3 centre(const Model& model, const State& state, Index object) {
-  const ObjectModel& o = model.objects[object];
-  Vec3 sum = Vec3::Zero();
-  double mass = 0.0;
-  for (Index n = o.node_begin; n < o.node_end; ++n) {
-    sum += model.node_mass[n] * state.x[n];
-    mass += model.node_mass[n];
-  }
-  return sum / mass;
-}
-
 // Steps until `object` is asleep; returns the steps taken, or -1 after `limit`.
 int steps_until_asleep(const Model& model, State& state, Scratch& scratch, Index object, int limit) {
   StepReport report;
@@ -59,7 +48,7 @@ TEST_CASE("an object at rest falls asleep and stays frozen exactly where it sett
   // It lands within about 50 ms, settles, then needs sleep_time (0.3 s) within 2 mm.
   const int steps = steps_until_asleep(model, state, scratch, 0, 2000);
   REQUIRE(steps > 300);
-  CHECK(centre(model, state, 0).y() == Approx(0.05).margin(0.005));  // resting on the floor
+  CHECK(centre_of_mass(model, state.x, 0).y() == Approx(0.05).margin(0.005));  // resting on the floor
   const std::vector<Vec3> settled = state.x;
   for (const Vec3& v : state.v) CHECK(v == Vec3::Zero());
   // Asleep: 500 steps change nothing, bit for bit, and allocate nothing.
@@ -84,13 +73,13 @@ TEST_CASE("an object moving into a sleeper wakes it and pushes it, never through
     step(model, state, scratch, report);
     if (asleep_at < 0 && state.asleep[0]) asleep_at = i;
     if (asleep_at >= 0 && woken_at < 0 && !state.asleep[0]) woken_at = i;
-    closest = std::min(closest, centre(model, state, 1).x() - centre(model, state, 0).x());
-    lowest = std::min(lowest, centre(model, state, 0).y());
+    closest = std::min(closest, centre_of_mass(model, state.x, 1).x() - centre_of_mass(model, state.x, 0).x());
+    lowest = std::min(lowest, centre_of_mass(model, state.x, 0).y());
   }
   REQUIRE(asleep_at > 0);
   CHECK(asleep_at < 450);                   // asleep before the slider arrives (341)
   CHECK(woken_at > asleep_at);              // woken by it (496)
-  CHECK(centre(model, state, 0).x() < -0.05);  // and pushed along -x
+  CHECK(centre_of_mass(model, state.x, 0).x() < -0.05);  // and pushed along -x
   CHECK(closest > 0.08);                    // box widths 10 cm: never through each other
   CHECK(lowest > 0.045);                    // nor into the floor
 }
@@ -125,10 +114,10 @@ TEST_CASE("a gravity command, a reset and the grab wake sleeping objects", "[sle
   drag.vector = state.grab.target + Vec3(0.0, 0.1, 0.0);  // lift it by 10 cm
   apply_command(model, initial, state, drag);
   StepReport report;
-  const double before = centre(model, state, 0).y();
+  const double before = centre_of_mass(model, state.x, 0).y();
   for (int i = 0; i < 300; ++i) step(model, state, scratch, report);
   CHECK(state.asleep[0] == 0);
-  CHECK(centre(model, state, 0).y() > before + 0.02);
+  CHECK(centre_of_mass(model, state.x, 0).y() > before + 0.02);
 }
 
 TEST_CASE("objects moving slower than the sleep radius per sleep time stay awake and free", "[sleep]") {

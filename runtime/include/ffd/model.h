@@ -171,4 +171,16 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log);
 // The state at time zero: rest lattice placed by each object's position, rotation, velocity.
 State initial_state(const Model& model);
 
+// Mass-weighted centre of one object's lattice nodes at positions x (m).
+inline Vec3 centre_of_mass(const Model& model, const std::vector<Vec3>& x, Index object) {
+  const ObjectModel& o = model.objects[object];
+  Vec3 sum = Vec3::Zero();
+  double mass = 0.0;
+  for (Index n = o.node_begin; n < o.node_end; ++n) {
+    sum += model.node_mass[n] * x[n];
+    mass += model.node_mass[n];
+  }
+  return sum / mass;
+}
+
 }  // namespace ffd
