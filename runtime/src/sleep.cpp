@@ -31,12 +31,16 @@ void set_wake_margins(const Model& model, const BoxSet& boxes, const State& stat
   }
 }
 
-void update_sleep(const Model& model, State& state) {
+std::uint32_t update_sleep(const Model& model, State& state) {
   // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
   const auto sleep_steps =
       static_cast<std::uint32_t>(std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
+  std::uint32_t asleep = 0;
   for (Index o = 0; o < model.objects.size(); ++o) {
-    if (state.asleep[o]) continue;
+    if (state.asleep[o]) {
+      ++asleep;
+      continue;
+    }
     const ObjectModel& object = model.objects[o];
     const Vec3 centre = centre_of_mass(model, state.x, o);
     if (!((centre - state.rest_anchor[o]).norm() <= model.settings.sleep_radius)) {
@@ -51,8 +55,10 @@ void update_sleep(const Model& model, State& state) {
     state.moving[o] = 0;
     if (++state.still_steps[o] < sleep_steps) continue;
     state.asleep[o] = 1;
+    ++asleep;
     for (Index n = object.node_begin; n < object.node_end; ++n) state.v[n] = Vec3::Zero();
   }
+  return asleep;
 }
 
 }  // namespace ffd

@@ -35,7 +35,8 @@ bool meet(State& state, Index object_a, Index object_b);
 
 // The Sleep stage, after all others: each awake object either stays within sleep_radius of
 // its rest anchor (one more still step; after sleep_time it falls asleep with v = 0) or
-// leaves it (a new anchor where it is now; `moving` if it left fast).
-void update_sleep(const Model& model, State& state);
+// leaves it (a new anchor where it is now; `moving` if it left fast). Returns how many
+// objects are asleep after it.
+std::uint32_t update_sleep(const Model& model, State& state);
 
 }  // namespace ffd

@@ -149,7 +149,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::Interaction:
         interact(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
         break;
-      case Stage::Sleep: update_sleep(model, state); break;
+      case Stage::Sleep: counters.objects_asleep = update_sleep(model, state); break;
       case Stage::Count: break;
     }
     report.stage_ns[static_cast<std::size_t>(stage)] = now_ns() - t0;

@@ -55,7 +55,7 @@ std::vector<std::pair<std::string, CounterSummary>> StepStatistics::counters(Sta
       {"inter_pairs_tested", &StageCounters::inter_pairs_tested}, {"self_pairs_tested", &StageCounters::self_pairs_tested},
       {"node_tests", &StageCounters::node_tests},             {"inter_contacts", &StageCounters::inter_contacts},
       {"self_contacts", &StageCounters::self_contacts},       {"plane_contacts", &StageCounters::plane_contacts},
-      {"probe_contacts", &StageCounters::probe_contacts},
+      {"probe_contacts", &StageCounters::probe_contacts},     {"objects_asleep", &StageCounters::objects_asleep},
   };
   std::vector<std::pair<std::string, CounterSummary>> out;
   const std::vector<StageCounters>& samples = counters_[index(stage)];

@@ -60,6 +60,7 @@ TEST_CASE("an object at rest falls asleep and stays frozen exactly where it sett
   CHECK(test::allocations() == 0);
   CHECK(state.x == settled);
   CHECK(state.asleep[0] == 1);
+  CHECK(report.counters[static_cast<std::size_t>(Stage::Sleep)].objects_asleep == 1);
 }
 
 TEST_CASE("an object moving into a sleeper wakes it and pushes it, never through it", "[sleep]") {

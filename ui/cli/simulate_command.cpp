@@ -55,6 +55,10 @@ void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::St
   }
   const ffd::TimeSummary t = stats.step_time();
   std::printf("%-14s %9.2f %9.2f %9.2f %9.2f\n", "whole step", t.mean_us, t.p50_us, t.p99_us, t.max_us);
+  if (ffd::has(model.settings.effects, ffd::Effect::Sleeping))
+    for (const auto& [name, c] : stats.counters(ffd::Stage::Sleep))
+      if (name == "objects_asleep")
+        std::printf("objects asleep: %.1f on average, at most %u of %zu\n", c.mean, c.max, model.objects.size());
 }
 
 }  // namespace

@@ -23,6 +23,7 @@ struct StageCounters {
   std::uint32_t self_contacts = 0;      // nodes found inside a non-adjacent box of the same object
   std::uint32_t plane_contacts = 0;     // boxes found below a static plane
   std::uint32_t probe_contacts = 0;     // probe nodes in a box, or box nodes in the probe sphere
+  std::uint32_t objects_asleep = 0;     // objects asleep after the Sleep stage ("sleeping")
 };
 
 enum class ContactKind : std::uint8_t { Inter, Self, Plane, Probe };
