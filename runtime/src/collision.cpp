@@ -80,8 +80,11 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
   const double u = (vb - va).dot(n);
   const PositionShares share = position_shares(inv_a, inv_b);
   if (u < 0.0) {  // eq. 8 only while the cells approach
-    const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
-    const Vec3 v_ref = static_a ? va : static_b ? vb : Vec3((ma * va + mb * vb) / (ma + mb));
+    Vec3 v_ref = static_a ? va : vb;  // a static side's velocity (zero) is the reference
+    if (!static_a && !static_b) {
+      const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
+      v_ref = (ma * va + mb * vb) / (ma + mb);
+    }
     const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
     const double bounce = may_rebound ? rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt) : 0.0;
     const Vec3 kick_a = -share.a * bounce * n, kick_b = share.b * bounce * n;
@@ -484,7 +487,7 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
   const BoxSet& boxes = *level.boxes;
   for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
     const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
-    if (sleeping(model) && !meet(state, object_1, object_2)) return;
+    if (sleeping(model)) meet(state, object_1, object_2);
     const bool same_object = object_1 == object_2;
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
@@ -502,7 +505,7 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
   scratch.surface_step_epoch = ++scratch.surface_epoch;
   for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
     const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
-    if (sleeping(model) && !meet(state, model.cell_object[c1], model.cell_object[c2])) return;
+    if (sleeping(model)) meet(state, model.cell_object[c1], model.cell_object[c2]);
     const bool same_object = model.cell_object[c1] == model.cell_object[c2];
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;

@@ -436,6 +436,9 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   if (planes) model.pipeline.push_back(Stage::Planes);
   if (probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::Interaction);
   if (has(effects, Effect::Sleeping)) model.pipeline.push_back(Stage::Sleep);
+  // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
+  model.sleep_steps = static_cast<std::uint32_t>(
+      std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
   return model;
 }
 

@@ -1,8 +1,5 @@
 #include "sleep.h"
 
-#include <algorithm>
-#include <cmath>
-
 namespace ffd {
 
 void wake(State& state, Index object) {
@@ -15,12 +12,9 @@ void wake_all(State& state) {
   for (Index o = 0; o < state.asleep.size(); ++o) wake(state, o);
 }
 
-bool meet(State& state, Index object_a, Index object_b) {
-  const bool asleep_a = state.asleep[object_a], asleep_b = state.asleep[object_b];
-  if (asleep_a && asleep_b) return false;
-  if (asleep_a && state.moving[object_b]) wake(state, object_a);
-  if (asleep_b && state.moving[object_a]) wake(state, object_b);
-  return true;
+void meet(State& state, Index object_a, Index object_b) {
+  if (state.asleep[object_a] && state.moving[object_b]) wake(state, object_a);
+  if (state.asleep[object_b] && state.moving[object_a]) wake(state, object_b);
 }
 
 void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch) {
@@ -32,9 +26,7 @@ void set_wake_margins(const Model& model, const BoxSet& boxes, const State& stat
 }
 
 std::uint32_t update_sleep(const Model& model, State& state) {
-  // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
-  const auto sleep_steps =
-      static_cast<std::uint32_t>(std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
+  const std::uint32_t sleep_steps = model.sleep_steps;
   std::uint32_t asleep = 0;
   for (Index o = 0; o < model.objects.size(); ++o) {
     if (state.asleep[o]) {

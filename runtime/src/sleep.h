@@ -6,7 +6,7 @@
 // still exactly where it settled, and collides as a static body.
 //
 // Objects sleep one by one, not in islands of touching objects as in Box2D: in a deep pile
-// the trembling never stops everywhere at once (104 letters: never within 10 s), but the
+// the trembling never stops everywhere at once (104 letters as one island: never within 6 s), but the
 // letters at the bottom settle first and, asleep, stop passing it on to those above. An
 // object wakes when an object moving faster than 2 sleep_radius / sleep_time brings its boxes
 // within 2 sleep_radius of the sleeper's, when the probe or the grab touches it, or when a
@@ -29,9 +29,9 @@ void set_wake_margins(const Model& model, const BoxSet& boxes, const State& stat
 void wake(State& state, Index object);
 void wake_all(State& state);
 
-// A pair of objects whose boxes meet this step (from the broad phase). Returns whether the
-// pair needs testing: not when both sleep. A moving object wakes a sleeping one.
-bool meet(State& state, Index object_a, Index object_b);
+// A pair of objects whose boxes meet this step (from the broad phase, which never pairs two
+// sleepers): a moving object wakes a sleeping one.
+void meet(State& state, Index object_a, Index object_b);
 
 // The Sleep stage, after all others: each awake object either stays within sleep_radius of
 // its rest anchor (one more still step; after sleep_time it falls asleep with v = 0) or

@@ -121,7 +121,7 @@ TEST_CASE("a gravity command, a reset and the grab wake sleeping objects", "[sle
   CHECK(centre_of_mass(model, state.x, 0).y() > before + 0.02);
 }
 
-TEST_CASE("objects moving slower than the sleep radius per sleep time stay awake and free", "[sleep]") {
+TEST_CASE("an object drifting 2 mm in under sleep_time stays awake, a slower one sleeps", "[sleep]") {
   // No gravity, a slow drift of 1 cm/s (2 mm in 0.2 s, under sleep_time = 0.3 s): it never
   // stays within 2 mm for 0.3 s, so it never sleeps; at 1 mm/s it sleeps.
   for (const double speed : {0.01, 0.001}) {
@@ -137,4 +137,35 @@ TEST_CASE("objects moving slower than the sleep radius per sleep time stay awake
     if (speed > 0.005) CHECK(steps == -1);
     else CHECK(steps == 301);  // the first step sets the anchor, then 300 still steps
   }
+}
+
+TEST_CASE("an object slower than the wake speed meets a sleeper as a static body, without waking it", "[sleep]") {
+  // No gravity. The resting box falls asleep at step 301; the other drifts into it at 1 cm/s:
+  // too fast to sleep (2 mm in 0.2 s), too slow to wake (2 sleep_radius / sleep_time =
+  // 13 mm/s). It reaches the sleeper after about 0.5 s and is stopped there.
+  SceneSpec spec;
+  spec.settings.effects = Effect::InterCollision | Effect::Sleeping;
+  spec.settings.alpha = 1.0;
+  spec.objects.push_back(test::box_object("resting", Vec3(0.1, 0.1, 0.1), 0.025, Vec3::Zero()));
+  ObjectSpec drifter = test::box_object("drifter", Vec3(0.1, 0.1, 0.1), 0.025, Vec3(0.105, 0.0, 0.0));
+  drifter.velocity = Vec3(-0.01, 0.0, 0.0);
+  spec.objects.push_back(drifter);
+  const Model model = test::compile_quietly(spec);
+  State state = initial_state(model);
+  Scratch scratch = make_scratch(model);
+  REQUIRE(steps_until_asleep(model, state, scratch, 0, 400) == 301);
+  const std::vector<Vec3> settled = state.x;
+  StepReport report;
+  std::uint32_t contacts = 0;
+  for (int i = 0; i < 1500; ++i) {
+    step(model, state, scratch, report);
+    contacts += report.counters[static_cast<std::size_t>(Stage::NarrowPhase)].inter_contacts;
+  }
+  CHECK(contacts > 0);        // they met
+  CHECK(state.asleep[0] == 1);  // it never woke
+  const ObjectModel& resting = model.objects[0];
+  for (Index n = resting.node_begin; n < resting.node_end; ++n) CHECK(state.x[n] == settled[n]);
+  // Stopped at the sleeper's face: centres one box width (10 cm) apart, less the boxes'
+  // margins, and not pushed through.
+  CHECK(centre_of_mass(model, state.x, 1).x() - centre_of_mass(model, state.x, 0).x() > 0.09);
 }

@@ -140,6 +140,7 @@ struct Model {
   // triangles move with.
   std::vector<Index> cell_triangle_source_begin, cell_triangle_sources;
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
+  std::uint32_t sleep_steps = 0;         // "sleeping": sleep_time in steps (>= 1)
 
   std::vector<Spring> springs;
   std::vector<Tetrahedron> tetrahedra;
