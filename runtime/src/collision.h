@@ -10,8 +10,10 @@ namespace ffd {
 // What an accuracy level collides: a box set, and which nodes of each box it tests.
 struct BoxLevel {
   const BoxSet* boxes;
-  int tested_nodes;  // the first 8 (corners) or all 9 (+ centre) of each box's nodes
-  bool samples;      // also Model::box_samples (level 3)
+  // Box nodes [first_node, end_node) are tested: 0-7 the corners, 8 the centre of mass.
+  int first_node;
+  int end_node;
+  bool samples;      // also Model::box_samples, the surface nodes (level 3)
   bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
   Index hash_table_size;  // buckets of the broad phase for these boxes
 };

@@ -10,6 +10,8 @@
 
 namespace ffd {
 
+static_assert(kBoxSampleCount == kSupportDirectionCount);
+
 namespace {
 
 std::string fmt(double v) {
@@ -20,21 +22,6 @@ std::string fmt(double v) {
 
 void require(bool ok, const std::string& where, const std::string& what) {
   if (!ok) throw CompileError(where + ": " + what);
-}
-
-// Level 3's extra nodes of a box: the centres of its 6 faces, then the midpoints of its 12
-// edges (the 4 along x, then y, then z).
-std::array<Vec3, kBoxSampleCount> box_sample_nodes(const std::array<Vec3, 9>& box) {
-  std::array<Vec3, kBoxSampleCount> samples;
-  int s = 0;
-  for (const auto& face : kBoxFaces)
-    samples[s++] = 0.25 * (box[face[0]] + box[face[1]] + box[face[2]] + box[face[3]]);
-  for (int axis = 0; axis < 3; ++axis) {
-    const int bit = 1 << axis;
-    for (int k = 0; k < 8; ++k)
-      if (!(k & bit)) samples[s++] = 0.5 * (box[k] + box[k | bit]);
-  }
-  return samples;
 }
 
 // Level 0's box: the whole lattice cell, its centre node at the cell centre.
@@ -277,7 +264,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
         const std::array<Vec3, 9>& box = lattice.box_local[c];
         model.boxes.box_cell.push_back(cell_index);
         model.boxes.box_local.push_back(box);
-        model.box_samples.push_back(box_sample_nodes(box));
+        model.box_samples.push_back(lattice.support_local[c]);
         model.grid_boxes.box_cell.push_back(cell_index);
         model.grid_boxes.box_local.push_back(grid_cell_box());
         for (const std::array<Vec3, 9>& part : lattice.sub_box_local[c]) {

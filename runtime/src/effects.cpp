@@ -34,7 +34,7 @@ const char* accuracy_name(Accuracy a) {
     case Accuracy::GridCells: return "grid cells";
     case Accuracy::BoundaryNodes: return "FFD AABB, 8 nodes";
     case Accuracy::CentreOfMass: return "FFD AABB + centre of mass";
-    case Accuracy::SampleNodes: return "FFD AABB + 27 nodes";
+    case Accuracy::SampleNodes: return "FFD AABB, 27 surface nodes";
     case Accuracy::SubBoxes: return "FFD sub-boxes";
     case Accuracy::Exact: return "exact surfaces";
   }

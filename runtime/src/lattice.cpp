@@ -254,6 +254,31 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
   out.cell_triangles.resize(out.cells.size());
   for (const auto& [li, triangle] : pieces) out.cell_triangles[kept_index[li]].push_back(triangle);
 
+  // Accuracy level 3: the extreme surface points of every surface cell along 26 directions,
+  // from the clipped pieces' corners (a piece's extreme along a direction is one of them).
+  out.support_local.resize(out.cells.size());
+  {
+    std::array<Vec3, kSupportDirectionCount> directions;
+    for (int d = 0, k = 0; k < 27; ++k) {
+      if (k == 13) continue;  // (0, 0, 0)
+      directions[d++] = Vec3(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
+    }
+    std::vector<std::array<double, kSupportDirectionCount>> reach(
+        out.cells.size(), [] { std::array<double, kSupportDirectionCount> r; r.fill(-INFINITY); return r; }());
+    for_each_piece([&](std::int64_t li, const std::array<Vec3, 9>& poly, int n, const Vec3&, Index) {
+      const Index c = kept_index[li];
+      if (c == kNoIndex || !acc[li].has_surface) return;
+      for (int v = 0; v < n; ++v)
+        for (int d = 0; d < kSupportDirectionCount; ++d) {
+          const double along = directions[d].dot(poly[v]);
+          if (along > reach[c][d]) {
+            reach[c][d] = along;
+            out.support_local[c][d] = poly[v];
+          }
+        }
+    });
+  }
+
   // Bind every vertex to a surface cell whose closed box contains it (eq. 1). A vertex on a
   // cell face belongs to several cells; the first surface one in (-1, 0) offset order wins.
   out.vertex_cell.resize(mesh.vertices.size());

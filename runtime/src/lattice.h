@@ -9,6 +9,10 @@
 
 namespace ffd {
 
+// Accuracy level 3's nodes: for each of the 26 directions (dx, dy, dz) in {-1, 0, 1}^3 but
+// 0, the point of the surface inside a cell that reaches furthest along it.
+inline constexpr int kSupportDirectionCount = 26;
+
 struct LatticeBuild {
   double cell_size = 0.0;  // h, m
   Vec3 origin;             // corner of grid cell (0,0,0), m
@@ -24,6 +28,10 @@ struct LatticeBuild {
   // Accuracy level 4: the surface cell split into k x k x k parts, one box per part the
   // surface passes through, fitted to the surface in it (same layout as box_local).
   std::vector<std::vector<std::array<Vec3, 9>>> sub_box_local;
+  // Accuracy level 3: per kept surface cell, its surface's extreme points along the 26
+  // directions (cell-local; unused for interior cells). Points of the surface itself, so
+  // unlike a box corner they never stand off it.
+  std::vector<std::array<Vec3, kSupportDirectionCount>> support_local;
   std::vector<std::vector<Index>> cell_triangles;  // per kept cell: triangles crossing it with area
   std::vector<Index> vertex_cell;   // index into `cells`
   std::vector<Vec3> vertex_local;   // (s, t, u) of eq. 1, divided by h

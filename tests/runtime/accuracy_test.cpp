@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include "collision.h"
+#include "ffd/closest_point.h"
 #include "ffd/command.h"
 #include "ffd/measure.h"
 #include "ffd/step.h"
+#include "ffd/trilinear.h"
 #include "support/test_scenes.h"
 
 using namespace ffd;
@@ -60,18 +62,81 @@ TEST_CASE("Accuracy: each level's boxes stay inside their cell and level 4's par
         CHECK((p.array() <= 1.0 + 1e-12).all());
       }
     }
-    // Level 3's samples: face centres and edge midpoints lie on the box's surface.
+    // Level 3's surface nodes lie in the FFD AABB: the plane stage's cull relies on it.
     for (const Vec3& p : model.box_samples[b]) {
-      const bool on_face = ((p - lo).cwiseAbs().array() < 1e-12).any() || ((p - hi).cwiseAbs().array() < 1e-12).any();
-      CHECK(on_face);
+      CHECK((p.array() >= lo.array() - 1e-12).all());
+      CHECK((p.array() <= hi.array() + 1e-12).all());
     }
   }
   CHECK(box_level(model, Accuracy::GridCells).boxes == &model.grid_boxes);
   CHECK(box_level(model, Accuracy::SubBoxes).boxes == &model.sub_boxes);
-  CHECK(box_level(model, Accuracy::CentreOfMass).tested_nodes == 9);
-  CHECK(box_level(model, Accuracy::BoundaryNodes).tested_nodes == 8);
-  CHECK(box_level(model, Accuracy::SampleNodes).samples);
+  CHECK(box_level(model, Accuracy::CentreOfMass).end_node == 9);
+  CHECK(box_level(model, Accuracy::BoundaryNodes).end_node == 8);
+  CHECK(box_level(model, Accuracy::SampleNodes).first_node == 8);  // no corners: the centre of mass and
+  CHECK(box_level(model, Accuracy::SampleNodes).samples);           // the surface nodes
   CHECK(box_level(model, Accuracy::Exact).exact);
+}
+
+TEST_CASE("Accuracy: level 3's nodes are points of the surface, the furthest it reaches in its cell along 26 directions") {
+  const Model model = compile_quietly(sphere_on_box());
+  const State state = initial_state(model);
+  const Index ball = 1;
+  const SurfaceMesh surface = deformed_surface(model, state, ball);
+  const ObjectModel& object = model.objects[ball];
+  Index checked = 0;
+  for (Index b = object.box_begin; b < object.box_end; ++b) {
+    const std::array<Index, 8>& corner = model.cell_nodes[model.boxes.box_cell[b]];
+    auto world = [&](const Vec3& local) {
+      return trilinear_map(local, [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+    };
+    for (int d = 0; d < kBoxSampleCount; ++d) {
+      const Vec3 node = world(model.box_samples[b][d]);
+      double distance = INFINITY;
+      for (const auto& t : surface.triangles) {
+        const Vec3 p = closest_point_on_triangle(node, surface.vertices[t[0]], surface.vertices[t[1]], surface.vertices[t[2]]).point;
+        distance = std::min(distance, (p - node).norm());
+      }
+      CHECK(distance < 1e-9);  // m: on the surface, where a box corner stands off it
+      ++checked;
+    }
+    // No surface vertex bound to the cell reaches further along a direction than its node.
+    const Index cell = model.boxes.box_cell[b];
+    for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
+      const Vec3& v = model.surface_vertex_local[model.cell_vertices[i]];
+      for (int d = 0, k = 0; k < 27; ++k) {
+        if (k == 13) continue;
+        const Vec3 direction(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
+        CHECK(direction.dot(v) <= direction.dot(model.box_samples[b][d]) + 1e-12);
+        ++d;
+      }
+    }
+  }
+  CHECK(checked == kBoxSampleCount * (object.box_end - object.box_begin));
+  CHECK(checked > 0);
+}
+
+TEST_CASE("Accuracy: a ball turned off the lattice axes floats on its box corners at level 2 and rests on its surface at level 3") {
+  // The lattice turns with the ball: each FFD AABB is axis-aligned in the ball's frame, and
+  // near the lowest point its corners stand below the surface.
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::Friction;
+  ObjectSpec ball = sphere_object("ball", 0.03, 0.01, Vec3(0.0, 0.04, 0.0));
+  ball.rotation_deg = Vec3(45.0, 0.0, 35.0);
+  spec.objects.push_back(ball);
+  spec.planes.push_back(floor_plane());
+  const Model model = compile_quietly(spec);
+  auto floor_contact = [&](Accuracy level) {
+    const State state = run_at(model, level, 600);
+    const SurfaceContactReport contacts = measure_surface_contacts(model, state, 0.02);
+    REQUIRE(contacts.contacts.size() == 1);
+    return contacts.contacts[0];
+  };
+  const SurfaceContact level_2 = floor_contact(Accuracy::CentreOfMass);
+  const SurfaceContact level_3 = floor_contact(Accuracy::SampleNodes);
+  CAPTURE(level_2.gap_m, level_2.penetration_m, level_3.gap_m, level_3.penetration_m);
+  CHECK(level_2.gap_m > 0.001);        // m
+  CHECK(level_3.gap_m < 0.0002);       // m
+  CHECK(level_3.penetration_m < 0.0005);
 }
 
 TEST_CASE("Accuracy: every level holds a ball on a box on the floor, level 0 floats and the finer levels do not") {

@@ -139,6 +139,12 @@ std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::s
         << "x cheaper per step; gap max " << gap_text(*paper) << " vs " << gap_text(*exact) << "; penetration max " << fixed(paper->penetration_max_mm, 2) << " mm vs "
         << fixed(exact->penetration_max_mm, 2) << " mm.\n";
     }
+    const AccuracyRun* surface = find_run(runs, scene, ffd::Accuracy::SampleNodes);
+    if (paper && surface && paper->collision_p50_ms > 0.0) {
+      s << "\nLevel 3 (surface nodes) against level 2: " << fixed(surface->collision_p50_ms / paper->collision_p50_ms, 2)
+        << "x the collision time; gap max " << gap_text(*surface) << " vs " << gap_text(*paper) << "; penetration max "
+        << fixed(surface->penetration_max_mm, 2) << " mm vs " << fixed(paper->penetration_max_mm, 2) << " mm.\n";
+    }
     s << "\n";
   }
   return s.str();

@@ -83,9 +83,9 @@ struct BoxSet {
   std::size_t size() const { return box_cell.size(); }
 };
 
-// Extra sample nodes per FFD AABB at accuracy level 3: its 6 face centres and 12 edge
-// midpoints, in cell-local coordinates.
-inline constexpr int kBoxSampleCount = 18;
+// Accuracy level 3's surface nodes per FFD AABB: the extreme points of the surface in its
+// cell along the 26 directions of a 3 x 3 x 3 neighbourhood, in cell-local coordinates.
+inline constexpr int kBoxSampleCount = 26;
 
 struct PlaneModel {
   std::string name;
@@ -120,7 +120,7 @@ struct Model {
   // local coordinates (section 4). Accuracy levels 1, 2, 3 collide these; level 5 keeps
   // them for the probe and the frames.
   BoxSet boxes;
-  std::vector<std::array<Vec3, kBoxSampleCount>> box_samples;  // level 3's extra nodes per box
+  std::vector<std::array<Vec3, kBoxSampleCount>> box_samples;  // level 3's surface nodes per box
   // Accuracy level 0: the plain lattice cells of the surface as boxes (corners at 0 and 1,
   // centre node at the cell centre). Level 4: every FFD AABB split into k x k x k parts, each
   // fitted to the surface inside it.

@@ -107,7 +107,7 @@ enum class Accuracy : std::uint8_t {
   GridCells = 0,      // the plain lattice cells as boxes, 8 corner nodes (floats: Fig. 7a)
   BoundaryNodes = 1,  // FFD AABBs with their 8 boundary nodes
   CentreOfMass = 2,   // + the surface's centre of mass in the cell (the paper's default)
-  SampleNodes = 3,    // + the 6 face centres and 12 edge midpoints of each FFD AABB
+  SampleNodes = 3,    // FFD AABBs; their nodes: the centre of mass + 26 extreme points of the surface
   SubBoxes = 4,       // each FFD AABB split into k x k x k sub-boxes fitted to the surface
   Exact = 5,          // surface vertices against surface triangles, with their own broad phase
 };
