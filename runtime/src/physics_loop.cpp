@@ -58,6 +58,7 @@ Frame make_frame_prototype(const Model& model) {
   Frame frame;
   frame.nodes.resize(model.node_count());
   frame.boxes.resize(model.box_count());
+  frame.asleep.resize(model.objects.size());
   frame.contacts.resize(kContactCapacity);
   return frame;
 }
@@ -205,6 +206,7 @@ void PhysicsLoop::Impl::publish_frame() {
         f.boxes[b][k] = trilinear_map(model.boxes.box_local[b][k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
     }
   }
+  std::copy(state.asleep.begin(), state.asleep.end(), f.asleep.begin());
   f.contact_count = scratch.contact_count;
   std::copy(scratch.contacts.begin(), scratch.contacts.begin() + scratch.contact_count, f.contacts.begin());
   f.probe = state.probe;

@@ -138,9 +138,9 @@ void Viewer::open_scene(const std::string& path) {
   grabbing_ = probing_ = false;
   recording_ = false;
   sent_.clear();
-  // Frame the objects at rest.
-  Vec3 lo = session_->model().node_rest.front(), hi = lo;
-  for (const Vec3& p : session_->model().node_rest) {
+  // Frame the objects where the scene places them (node_rest is each object's own frame).
+  Vec3 lo = initial.x.front(), hi = lo;
+  for (const Vec3& p : initial.x) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
@@ -558,6 +558,10 @@ void Viewer::latency_panel(int width) {
   }
   if (const Frame* frame = session_->frame(); frame && has(model.settings.effects, Effect::Probe))
     ImGui::Text("probe force %.3f N", frame->probe.force.norm());
+  if (const Frame* frame = session_->frame(); frame && has(model.settings.effects, Effect::Sleeping)) {
+    const auto asleep = std::count(frame->asleep.begin(), frame->asleep.end(), std::uint8_t{1});
+    ImGui::Text("asleep %lld of %zu objects (drawn grey)", static_cast<long long>(asleep), model.objects.size());
+  }
   ImGui::End();
 }
 

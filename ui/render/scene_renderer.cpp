@@ -331,8 +331,11 @@ void SceneRenderer::draw(const Frame& frame, const OrbitCamera& camera, int widt
   set_matrix(surface_program_, "view_projection", view_projection);
   set_vec3(surface_program_, "eye", eye);
   glUniform1i(glGetUniformLocation(surface_program_, "checker"), 0);
-  for (const SurfaceBatch& b : surfaces_) {
-    set_vec3(surface_program_, "albedo", b.colour);
+  for (std::size_t o = 0; o < surfaces_.size(); ++o) {
+    const SurfaceBatch& b = surfaces_[o];
+    // An object asleep is drawn greyed, half its colour: frozen until something wakes it.
+    const bool asleep = o < frame.asleep.size() && frame.asleep[o];
+    set_vec3(surface_program_, "albedo", asleep ? Vec3f(0.5f * b.colour + Vec3f::Constant(0.2f)) : b.colour);
     glBindVertexArray(b.vao);
     glDrawElements(GL_TRIANGLES, b.index_count, GL_UNSIGNED_INT, nullptr);
   }
@@ -383,10 +386,14 @@ void SceneRenderer::draw_planes(const Mat4f& view_projection, const OrbitCamera&
   set_vec3(solid_program_, "albedo", Vec3f(0.55f, 0.56f, 0.58f));
   glUniform1i(glGetUniformLocation(solid_program_, "checker"), 1);
   glBindVertexArray(quad_vao_);
+  const Vec3f eye = camera.eye();
   for (const PlaneModel& plane : model_.planes) {
+    const Vec3f n = to_float(plane.normal);
+    // A plane bounds a solid half-space below it: seen from inside that solid (a bin's near
+    // wall, from a camera outside the bin) it would hide everything, so it is not drawn.
+    if (eye.dot(n) < static_cast<float>(plane.offset)) continue;
     // A square around the point of the plane nearest the camera's target, large enough to
     // reach the horizon at this zoom.
-    const Vec3f n = to_float(plane.normal);
     const Vec3f u = (std::abs(n.x()) < 0.9f ? Vec3f::UnitX() : Vec3f::UnitY()).cross(n).normalized();
     const Vec3f v = n.cross(u);
     const Vec3f centre = camera.target - (camera.target.dot(n) - static_cast<float>(plane.offset)) * n;

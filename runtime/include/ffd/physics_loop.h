@@ -84,6 +84,7 @@ struct Frame {
   std::uint64_t step = 0;
   std::vector<Vec3> nodes;                 // (N) lattice node positions, m
   std::vector<std::array<Vec3, 9>> boxes;  // (B) FFD AABB: 8 corners, then centre of mass, m
+  std::vector<std::uint8_t> asleep;        // (O) 1 for an object asleep (the "sleeping" effect)
   std::vector<Contact> contacts;           // [0, contact_count) hold this step's contacts
   std::uint32_t contact_count = 0;
   ProbeState probe;
