@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <stdexcept>
 #include <string>
@@ -250,6 +251,16 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
         out.cells.push_back(c);
         out.cell_has_surface.push_back(acc[li].has_surface);
       }
+
+  // Areas are measured in cell units: a cell vastly larger than the mesh leaves every piece
+  // below the area threshold, and then no vertex would have a cell to be bound to.
+  if (std::find(out.cell_has_surface.begin(), out.cell_has_surface.end(), true) == out.cell_has_surface.end()) {
+    char message[200];
+    std::snprintf(message, sizeof message,
+                  "no triangle has an area at cell size %g m for a mesh of extent %g m; use a cell_size nearer "
+                  "the mesh's size", h, extent.maxCoeff());
+    throw std::invalid_argument(message);
+  }
 
   out.cell_triangles.resize(out.cells.size());
   for (const auto& [li, triangle] : pieces) out.cell_triangles[kept_index[li]].push_back(triangle);

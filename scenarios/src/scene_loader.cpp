@@ -684,6 +684,14 @@ SceneSpec load_scene_file(const std::string& path, const SceneLimits& limits) {
                      limits);
 }
 
+Model compile_scene(const SceneSpec& spec, const std::string& path, std::vector<std::string>& log) {
+  try {
+    return compile(spec, log);
+  } catch (const CompileError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+}
+
 std::string default_scene_path() { return FFDSIM_SCENARIO_DIR "/scenes/two_teapots.toml"; }
 
 SceneSpec default_scene() { return load_scene_file(default_scene_path()); }

@@ -1049,6 +1049,19 @@ TEST_CASE("subdivide out of range names the file and line and column and field",
                 "inline.toml:12:13: group[0].subdivide: must be in [0, 3] (got 4)");
 }
 
+TEST_CASE("a cell so large that no triangle has an area in it is refused, naming the file", "[scene_loader]") {
+  // Areas are measured in cells: a 1.2 m box in 3.3e30 m cells leaves no cell with surface,
+  // and so no cell to bind the vertices to (a fuzzer's find).
+  const ffd::SceneSpec spec = parse(scene_with_object(
+      "name = \"box\"\nshape = \"box\"\nsize = [1.2, 0.1, 0.1]\ncell_size = 3.3e30\n[object.mass_spring]\n"));
+  std::vector<std::string> log;
+  REQUIRE_THROWS_AS(ffd::compile(spec, log), ffd::CompileError);
+  REQUIRE_THROWS_WITH(ffd::compile_scene(spec, "inline.toml", log),
+                      Equals("inline.toml: object 'box'.cell_size: no triangle has an area at cell size 3.3e+30 m for "
+                             "a mesh of extent 1.2 m; use a cell_size nearer the mesh's size"));
+  REQUIRE_THROWS_AS(ffd::compile_scene(spec, "inline.toml", log), ffd::SceneError);
+}
+
 TEST_CASE("scene limits turn oversized scenes into errors naming the limit", "[scene_loader]") {
   const auto box_object = [](const std::string& size, const std::string& cell_size, const std::string& extra = "") {
     return scene_with_object("name = \"b\"\nshape = \"box\"\nsize = " + size + "\ncell_size = " + cell_size + "\n" +

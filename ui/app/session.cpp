@@ -9,7 +9,7 @@ namespace ffd::ui {
 Session::Session(const std::string& scene_path, const SessionOptions& options)
     : scene_path_(std::filesystem::absolute(scene_path).lexically_normal().string()), options_(options) {
   const SceneSpec spec = load_scene_file(scene_path_);
-  model_ = std::make_unique<Model>(compile(spec, compile_log_));
+  model_ = std::make_unique<Model>(compile_scene(spec, scene_path_, compile_log_));
   initial_ = initial_state(*model_);
   if (options_.loop.hash_every == 0) options_.loop.hash_every = 100;
   log_.scene_path = scene_path_;

@@ -52,7 +52,7 @@ int run_accuracy_command(const AccuracyOptions& o) {
     for (const std::string& file : scenes) {
       const ffd::SceneSpec spec = ffd::load_scene_file(file);
       std::vector<std::string> log;
-      const ffd::Model model = ffd::compile(spec, log);
+      const ffd::Model model = ffd::compile_scene(spec, file, log);
       const std::string name = spec.name.empty() ? std::filesystem::path(file).stem().string() : spec.name;
       for (int level : levels) {
         runs.push_back(ffdbench::run_accuracy(model, name, static_cast<ffd::Accuracy>(level), o.steps, 50, std::ref(progress)));

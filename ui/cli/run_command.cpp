@@ -217,7 +217,7 @@ int run_run(const RunOptions& given) {
     const std::string scene = !o.scene.empty() ? o.scene : script && !script->scene_path.empty() ? script->scene_path : ffd::default_scene_path();
     scene_path = std::filesystem::absolute(scene).lexically_normal().string();
     std::vector<std::string> log;
-    model = ffd::compile(ffd::load_scene_file(scene_path), log);
+    model = ffd::compile_scene(ffd::load_scene_file(scene_path), scene_path, log);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (!o.record_path.empty()) ensure_parent_folder(o.record_path);
     if (!o.frames_dir.empty()) ensure_folder(o.frames_dir);

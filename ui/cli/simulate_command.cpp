@@ -82,7 +82,7 @@ int run_simulate(const SimulateOptions& o) {
     const std::string scene_path = o.scene.empty() ? ffd::default_scene_path() : o.scene;
     const ffd::SceneSpec spec = ffd::load_scene_file(scene_path);
     std::vector<std::string> log;
-    const ffd::Model model = ffd::compile(spec, log);
+    const ffd::Model model = ffd::compile_scene(spec, scene_path, log);
     if (!o.quiet)
       for (const std::string& line : log) std::fprintf(stderr, "ffdsim: %s\n", line.c_str());
     ensure_folder(o.out_dir);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "ffd/model.h"
 #include "ffd/spec.h"
 #include "ffd/toml_reader.h"
 
@@ -37,6 +38,10 @@ struct SceneLimits {
 
 // Loads a scene file; mesh paths inside it are relative to the file's folder.
 SceneSpec load_scene_file(const std::string& path, const SceneLimits& limits = {});
+
+// compile() for a scene loaded from `path`: a CompileError becomes an InputError that names
+// the file first, as the loader's own errors do ("scene.toml: object 'box'.cell_size: ...").
+Model compile_scene(const SceneSpec& spec, const std::string& path, std::vector<std::string>& log);
 
 // Parses scene text; `origin` names it in messages and `base_dir` resolves mesh paths.
 SceneSpec parse_scene(const std::string& text, const std::string& origin, const std::string& base_dir,
