@@ -270,10 +270,7 @@ LatticeBuild build_lattice(const SurfaceMesh& mesh, double cell_size, bool fill_
   out.support_local.resize(out.cells.size());
   {
     std::array<Vec3, kSupportDirectionCount> directions;
-    for (int d = 0, k = 0; k < 27; ++k) {
-      if (k == 13) continue;  // (0, 0, 0)
-      directions[d++] = Vec3(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
-    }
+    for (int d = 0; d < kSupportDirectionCount; ++d) directions[d] = support_direction(d);
     std::vector<std::array<double, kSupportDirectionCount>> reach(
         out.cells.size(), [] { std::array<double, kSupportDirectionCount> r; r.fill(-INFINITY); return r; }());
     for_each_piece([&](std::int64_t li, const std::array<Vec3, 9>& poly, int n, const Vec3&, Index) {

@@ -12,6 +12,11 @@ namespace ffd {
 // Accuracy level 3's nodes: for each of the 26 directions (dx, dy, dz) in {-1, 0, 1}^3 but
 // 0, the point of the surface inside a cell that reaches furthest along it.
 inline constexpr int kSupportDirectionCount = 26;
+// Direction d of the 26 (not normalised): the 27 offsets in x-fastest order, (0, 0, 0) skipped.
+inline Vec3 support_direction(int d) {
+  const int k = d < 13 ? d : d + 1;
+  return Vec3(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
+}
 
 struct LatticeBuild {
   double cell_size = 0.0;  // h, m

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "collision.h"
+#include "lattice.h"
 #include "ffd/closest_point.h"
 #include "ffd/command.h"
 #include "ffd/measure.h"
@@ -103,13 +104,15 @@ TEST_CASE("Accuracy: level 3's nodes are points of the surface, the furthest it 
     const Index cell = model.boxes.box_cell[b];
     for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
       const Vec3& v = model.surface_vertex_local[model.cell_vertices[i]];
-      for (int d = 0, k = 0; k < 27; ++k) {
-        if (k == 13) continue;
-        const Vec3 direction(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
+      for (int d = 0; d < kBoxSampleCount; ++d) {
+        const Vec3 direction = support_direction(d);
         CHECK(direction.dot(v) <= direction.dot(model.box_samples[b][d]) + 1e-12);
-        ++d;
       }
     }
+  }
+  for (int d = 0; d < kBoxSampleCount; ++d) {  // the 26 offsets of a 3 x 3 x 3 neighbourhood, each once
+    CHECK(support_direction(d).cwiseAbs().maxCoeff() == 1.0);
+    for (int e = 0; e < d; ++e) CHECK(support_direction(d) != support_direction(e));
   }
   CHECK(checked == kBoxSampleCount * (object.box_end - object.box_begin));
   CHECK(checked > 0);
