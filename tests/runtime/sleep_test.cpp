@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "ffd/command.h"
+#include "ffd/physics_loop.h"
 #include "ffd/step.h"
 #include "support/allocation_counter.h"
 #include "support/test_scenes.h"
@@ -168,4 +169,28 @@ TEST_CASE("an object slower than the wake speed meets a sleeper as a static body
   // Stopped at the sleeper's face: centres one box width (10 cm) apart, less the boxes'
   // margins, and not pushed through.
   CHECK(centre_of_mass(model, state.x, 1).x() - centre_of_mass(model, state.x, 0).x() > 0.09);
+}
+
+TEST_CASE("frames from the physics loop carry which objects are asleep, for the viewer", "[sleep]") {
+  const Model model = test::compile_quietly(resting_scene(true));
+  LoopOptions options;
+  options.pacing = Pacing::Fast;
+  options.realtime_priority = false;
+  options.lock_memory = false;
+  options.stop_at_step = 400;  // the resting box is asleep (from about step 340), the slider not yet near
+  PhysicsLoop loop(model, initial_state(model), options);
+  loop.start();
+  Telemetry t;
+  while (!loop.finished())
+    while (loop.pop_telemetry(t)) {
+    }
+  loop.join();
+  while (loop.pop_telemetry(t)) {
+  }
+  const Frame* frame = loop.latest_frame();
+  REQUIRE(frame != nullptr);
+  REQUIRE(frame->asleep.size() == model.objects.size());
+  CHECK(frame->asleep[0] == 1);
+  CHECK(frame->asleep[1] == 0);
+  CHECK(loop.state().asleep[0] == 1);
 }

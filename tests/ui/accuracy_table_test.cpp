@@ -44,3 +44,27 @@ TEST_CASE("Accuracy gap: one jittering node leaves an object at rest, a moving o
   for (Index n = box.node_begin; n < box.node_end; ++n) scene.state.v[n] = Vec3(0.06, 0.0, 0.0);
   CHECK(ffdbench::resting_gap(scene.model, scene.state, contacts) == -1.0);
 }
+
+TEST_CASE("Accuracy table: levels 2, 3 and 5 of a scene get their comparison lines") {
+  auto run = [](Accuracy level, double collision_ms, double gap_mm, double penetration_mm) {
+    ffdbench::AccuracyRun r;
+    r.scene = "bunnies";
+    r.level = level;
+    r.rest_samples = 1;
+    r.collision_p50_ms = collision_ms;
+    r.gap_max_mm = gap_mm;
+    r.penetration_max_mm = penetration_mm;
+    return r;
+  };
+  const std::vector<ffdbench::AccuracyRun> runs = {run(Accuracy::CentreOfMass, 2.0, 3.79, 0.0),
+                                                   run(Accuracy::SampleNodes, 2.1, 0.0, 0.55),
+                                                   run(Accuracy::Exact, 8.0, 0.0, 0.0)};
+  const std::string table = ffdbench::markdown_accuracy(runs, "test CPU", 3000);
+  CHECK_THAT(table, Catch::Contains("Level 2 (the paper's) against level 5 (exact): 4.0x cheaper per step; gap max "
+                                    "3.79 mm vs 0.00 mm; penetration max 0.00 mm vs 0.00 mm."));
+  CHECK_THAT(table, Catch::Contains("Level 3 (surface nodes) against level 2: 1.05x the collision time; gap max "
+                                    "0.00 mm vs 3.79 mm; penetration max 0.55 mm vs 0.00 mm."));
+  // Without a level 3 run, no level 3 line.
+  const std::string without = ffdbench::markdown_accuracy({runs[0], runs[2]}, "test CPU", 3000);
+  CHECK_THAT(without, !Catch::Contains("Level 3 (surface nodes)"));
+}
