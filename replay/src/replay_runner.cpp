@@ -100,6 +100,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   options.pacing = run_options.pacing;
   options.period_ns = run_options.period_ns;
   options.budget_ns = run_options.budget_ns;
+  options.threads = run_options.threads;
   options.stop_at_step = script.steps;
   options.hash_every = static_cast<std::uint32_t>(hash_interval(script));
   // Every step when the energy gain is asserted: impact peaks last a step or two.

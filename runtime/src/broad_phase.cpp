@@ -1,30 +1,497 @@
-#include "ffd/broad_phase.h"
+// The broad phase (paper section 6.1). The paper hashes every box of the scene into one
+// spatial hash and visits every pair of boxes sharing a bucket; most of those pairs are
+// neighbouring cells of one object, which touch by construction and are thrown away after
+// the visit. Here the work follows what the narrow phase wants:
+//   - between objects: only pairs of objects whose bounds overlap (sort and sweep over the
+//     objects' AABBs), and of those only the boxes inside the other object's bounds, paired
+//     through a small grid over the overlap region (the paper's spatial grid, per pair);
+//   - within an object (self-collision): a grid over the object; a grid cell whose boxes are
+//     all lattice neighbours of each other (every grid cell of an undeformed object) is
+//     passed over whole, without pairing its boxes.
+// A pair found in several grid cells is taken only in the cell holding the lower corner of
+// the overlap of the two AABBs, so each pair is found once. The pairs are then sorted, so
+// the narrow phase answers them in an order that depends on nothing but the boxes.
+#include <algorithm>
+#include <cmath>
 
 #include "collision.h"
+#include "ffd/worker_pool.h"
+#include "sleep.h"
 
 namespace ffd {
 
-SpatialHashBroadPhase::SpatialHashBroadPhase(double hash_cell_size, Index table_size) {
-  model_.hash_cell_size = hash_cell_size;
-  model_.hash_table_size = table_size;
-  scratch_ = make_scratch(model_);  // sized for no boxes: find_pairs works before set_boxes
-}
+namespace {
 
-void SpatialHashBroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& boxes) {
-  if (boxes.size() != model_.box_count()) {
-    model_.boxes.box_cell.assign(boxes.size(), 0);  // box_count() is all the broad phase reads
-    scratch_ = make_scratch(model_);
+// A dense grid over a region: integer cell coordinates clamped into [0, n) per axis, so a
+// box far outside (or non-finite) lands in a border cell and is still paired correctly,
+// only less selectively. Cells are numbered x fastest.
+struct Grid {
+  double origin[3];
+  double inv_cell;
+  int n[3];
+
+  int coordinate(double v, int axis) const {
+    const double g = (v - origin[axis]) * inv_cell;
+    if (!(g > 0.0)) return 0;  // also NaN
+    return g >= n[axis] - 1 ? n[axis] - 1 : static_cast<int>(g);  // truncation: floor for g > 0
   }
-  scratch_.box_nodes = boxes;
+  std::size_t cells() const { return static_cast<std::size_t>(n[0]) * n[1] * n[2]; }
+  std::size_t index(int x, int y, int z) const {
+    return static_cast<std::size_t>(x) + static_cast<std::size_t>(n[0]) * (static_cast<std::size_t>(y) + static_cast<std::size_t>(n[1]) * z);
+  }
+};
+
+// A grid of about `cell` over [lo, hi], with at most kBroadPhaseGridCells cells (coarser if the
+// region is huge: a blown-up object).
+Grid make_grid(const double lo[3], const double hi[3], double cell) {
+  Grid g;
+  double extent[3];
+  for (int a = 0; a < 3; ++a) {
+    g.origin[a] = std::isfinite(lo[a]) ? lo[a] : 0.0;
+    extent[a] = std::isfinite(hi[a] - g.origin[a]) && hi[a] > g.origin[a] ? hi[a] - g.origin[a] : 0.0;
+  }
+  if (!(cell > 0.0)) cell = 1.0;
+  for (;;) {
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) cells *= std::floor(extent[a] / cell) + 1.0;
+    if (cells <= kBroadPhaseGridCells) break;
+    cell *= 2.0;
+  }
+  g.inv_cell = 1.0 / cell;
+  for (int a = 0; a < 3; ++a) g.n[a] = static_cast<int>(std::floor(extent[a] / cell)) + 1;
+  return g;
 }
 
-bool SpatialHashBroadPhase::find_pairs(std::vector<std::pair<Index, Index>>& pairs) {
+// The grid cell edge: the scene's hash_cell_size, or the objects' lattice cell size (a box
+// lies within its cell, so it covers at most 2 x 2 x 2 grid cells until it turns).
+double grid_cell(const Model& model, double object_cell) {
+  return model.settings.hash_cell_size > 0.0 ? model.settings.hash_cell_size : object_cell;
+}
+
+bool overlap(const Scratch& s, Index a, Index b) {
+  for (int axis = 0; axis < 3; ++axis)
+    if (!(s.box_lo[axis][a] <= s.box_hi[axis][b] && s.box_lo[axis][b] <= s.box_hi[axis][a])) return false;
+  return true;
+}
+
+// The pair is taken in grid cell (x, y, z) only if it holds the lower corner of the overlap.
+bool lower_corner_here(const Grid& g, const Scratch& s, Index a, Index b, int x, int y, int z) {
+  return g.coordinate(std::max(s.box_lo[0][a], s.box_lo[0][b]), 0) == x &&
+         g.coordinate(std::max(s.box_lo[1][a], s.box_lo[1][b]), 1) == y &&
+         g.coordinate(std::max(s.box_lo[2][a], s.box_lo[2][b]), 2) == z;
+}
+
+// The cell of the hash that orders the pairs: the scene's hash_cell_size, or the largest
+// lattice cell.
+double hash_order_cell(const Model& model) {
+  if (model.settings.hash_cell_size > 0.0) return model.settings.hash_cell_size;
+  double largest = 0.0;
+  for (const ObjectModel& o : model.objects) largest = std::max(largest, o.cell_size);
+  return largest > 0.0 ? largest : 1.0;
+}
+
+using PairWorkspace = Scratch::PairWorkspace;
+using PairTask = Scratch::PairTask;
+
+bool push_pair(PairWorkspace& w, Index a, Index b) {
+  if (w.pair_count == w.pairs.size()) {
+    w.dropped = true;
+    return false;
+  }
+  w.pairs[w.pair_count++] = a < b ? BoxPair{a, b} : BoxPair{b, a};
+  return true;
+}
+
+// Counting sort of the entries of `boxes` into the grid cells their AABBs cover:
+// scratch.grid_begin[c] .. grid_begin[c + 1] hold the boxes of cell c. False if the entry
+// buffer is too small (grow_scratch() makes room between steps).
+bool fill_grid(const Grid& g, const Index* boxes, Index count, const Scratch& s, PairWorkspace& w) {
+  const std::size_t cells = g.cells();
+  std::fill(w.grid_begin.begin(), w.grid_begin.begin() + cells + 1, 0);
+  std::size_t entries = 0;
+  std::array<int, 6>* range = w.box_range.data();  // per listed box: x0, x1, y0, y1, z0, z1
+  for (Index i = 0; i < count; ++i) {
+    const Index b = boxes[i];
+    std::array<int, 6>& r = range[i];
+    for (int axis = 0; axis < 3; ++axis) {
+      r[2 * axis] = g.coordinate(s.box_lo[axis][b], axis);
+      r[2 * axis + 1] = g.coordinate(s.box_hi[axis][b], axis);
+    }
+    entries += static_cast<std::size_t>(r[1] - r[0] + 1) * (r[3] - r[2] + 1) * (r[5] - r[4] + 1);
+    if (entries > w.grid_entries.size()) {
+      w.dropped = true;  // room for the next step is made between steps
+      return false;
+    }
+    for (int z = r[4]; z <= r[5]; ++z)
+      for (int y = r[2]; y <= r[3]; ++y) {
+        const std::size_t row = g.index(0, y, z);
+        for (int x = r[0]; x <= r[1]; ++x) ++w.grid_begin[row + x + 1];
+      }
+  }
+  for (std::size_t c = 0; c < cells; ++c) w.grid_begin[c + 1] += w.grid_begin[c];
+  // Fill through a running cursor per cell, so that a cell's entries keep list order.
+  std::copy(w.grid_begin.begin(), w.grid_begin.begin() + cells, w.grid_cursor.begin());
+  for (Index i = 0; i < count; ++i) {
+    const std::array<int, 6>& r = range[i];
+    for (int z = r[4]; z <= r[5]; ++z)
+      for (int y = r[2]; y <= r[3]; ++y) {
+        const std::size_t row = g.index(0, y, z);
+        for (int x = r[0]; x <= r[1]; ++x) w.grid_entries[w.grid_cursor[row + x]++] = boxes[i];
+      }
+  }
+  w.entries += static_cast<std::uint32_t>(entries);
+  return true;
+}
+
+// Self-collision of one object: pairs of boxes of cells that share no lattice node.
+void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Scratch& s,
+                PairWorkspace& w) {
+  const Index first = first_box(boxes, object), last = end_box(boxes, object);
+  if (last - first < 2) return;
+  const Index o = static_cast<Index>(&object - model.objects.data());
+  const Grid g = make_grid(s.object_lo[o].data(), s.object_hi[o].data(), grid_cell(model, object.cell_size));
+  if (g.cells() + 1 > w.grid_begin.size()) return;  // cannot happen: sized for kBroadPhaseGridCells
+  Index* list = w.box_list_a.data();
+  for (Index b = first; b < last; ++b) list[b - first] = b;
+  if (!fill_grid(g, list, last - first, s, w)) return;
+  for (int z = 0; z < g.n[2]; ++z)
+    for (int y = 0; y < g.n[1]; ++y)
+      for (int x = 0; x < g.n[0]; ++x) {
+        const std::size_t c = g.index(x, y, z);
+        const Index begin = w.grid_begin[c], end = w.grid_begin[c + 1];
+        if (end - begin < 2) continue;
+        // Lattice neighbours all? Then no pair here is wanted.
+        const Vec3i* lattice = boxes.box_lattice.data();
+        const Index* entry = w.grid_entries.data() + begin;
+        const Index k = end - begin;
+        Vec3i lo = lattice[entry[0]], hi = lo;
+        for (Index i = 1; i < k; ++i) {
+          lo = lo.cwiseMin(lattice[entry[i]]);
+          hi = hi.cwiseMax(lattice[entry[i]]);
+        }
+        if (((hi - lo).array() <= 1).all()) continue;
+        // Else the pairs two or more lattice steps apart, found branch-free over the cell's
+        // lattice coordinates first; then their AABBs.
+        int* cx = w.cell_lattice[0].data();
+        int* cy = w.cell_lattice[1].data();
+        int* cz = w.cell_lattice[2].data();
+        for (Index i = 0; i < k; ++i) {
+          cx[i] = lattice[entry[i]].x();
+          cy[i] = lattice[entry[i]].y();
+          cz[i] = lattice[entry[i]].z();
+        }
+        Index* far = w.cell_far.data();
+        for (Index i = 0; i < k; ++i) {
+          Index count = 0;
+          for (Index j = i + 1; j < k; ++j) {
+            far[count] = j;
+            const int dx = cx[i] - cx[j], dy = cy[i] - cy[j], dz = cz[i] - cz[j];
+            count += static_cast<Index>((dx > 1) | (dx < -1) | (dy > 1) | (dy < -1) | (dz > 1) | (dz < -1));
+          }
+          for (Index f = 0; f < count; ++f) {
+            const Index a = entry[i], b = entry[far[f]];
+            if (overlap(s, a, b) && lower_corner_here(g, s, a, b, x, y, z) && !push_pair(w, a, b)) return;
+          }
+        }
+      }
+}
+
+// Boxes of `object` whose AABBs reach into [lo, hi].
+Index boxes_within(const BoxSet& boxes, const ObjectModel& object, const std::array<double, 3>& lo,
+                   const std::array<double, 3>& hi, const Scratch& s, Index* out) {
+  Index count = 0;
+  for (Index b = first_box(boxes, object); b < end_box(boxes, object); ++b) {
+    out[count] = b;
+    count += static_cast<Index>((s.box_lo[0][b] <= hi[0]) & (s.box_hi[0][b] >= lo[0]) & (s.box_lo[1][b] <= hi[1]) &
+                                (s.box_hi[1][b] >= lo[1]) & (s.box_lo[2][b] <= hi[2]) & (s.box_hi[2][b] >= lo[2]));
+  }
+  return count;
+}
+
+// Pairs between two objects whose bounds overlap.
+void object_pairs(const Model& model, const BoxSet& boxes, Index oa, Index ob, const Scratch& s, PairWorkspace& w) {
+  const ObjectModel& A = model.objects[oa];
+  const ObjectModel& B = model.objects[ob];
+  Index* list_a = w.box_list_a.data();
+  Index* list_b = w.box_list_b.data();
+  const Index na = boxes_within(boxes, A, s.object_lo[ob], s.object_hi[ob], s, list_a);
+  if (na == 0) return;
+  const Index nb = boxes_within(boxes, B, s.object_lo[oa], s.object_hi[oa], s, list_b);
+  if (nb == 0) return;
+  if (static_cast<std::size_t>(na) * nb <= 256) {  // small: every pair
+    for (Index i = 0; i < na; ++i)
+      for (Index j = 0; j < nb; ++j)
+        if (overlap(s, list_a[i], list_b[j]) && !push_pair(w, list_a[i], list_b[j])) return;
+    return;
+  }
+  // A grid over the overlap of the two objects' bounds, A's boxes in it; B's boxes look up
+  // the cells they cover.
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(s.object_lo[oa][a], s.object_lo[ob][a]);
+    hi[a] = std::min(s.object_hi[oa][a], s.object_hi[ob][a]);
+  }
+  const Grid g = make_grid(lo, hi, grid_cell(model, std::max(A.cell_size, B.cell_size)));
+  if (!fill_grid(g, list_a, na, s, w)) return;
+  for (Index j = 0; j < nb; ++j) {
+    const Index b = list_b[j];
+    const int x0 = g.coordinate(s.box_lo[0][b], 0), x1 = g.coordinate(s.box_hi[0][b], 0);
+    const int y0 = g.coordinate(s.box_lo[1][b], 1), y1 = g.coordinate(s.box_hi[1][b], 1);
+    const int z0 = g.coordinate(s.box_lo[2][b], 2), z1 = g.coordinate(s.box_hi[2][b], 2);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const std::size_t c = g.index(x, y, z);
+          for (Index i = w.grid_begin[c]; i < w.grid_begin[c + 1]; ++i) {
+            const Index a = w.grid_entries[i];
+            if (overlap(s, a, b) && lower_corner_here(g, s, a, b, x, y, z) && !push_pair(w, a, b)) return;
+          }
+        }
+  }
+}
+
+// Pairs of boxes of one object's cells that share a lattice node (touching by construction)
+// and whose AABBs overlap: from the lattice's neighbour lists, no search.
+void neighbour_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Scratch& s,
+                     PairWorkspace& w) {
+  for (Index c = object.cell_begin; c < object.cell_end; ++c)
+    for (Index a = boxes.cell_box_begin[c]; a < boxes.cell_box_begin[c + 1]; ++a)
+      for (Index i = model.cell_neighbour_begin[c]; i < model.cell_neighbour_begin[c + 1]; ++i) {
+        const Index n = model.cell_neighbours[i];
+        if (n < c) continue;
+        for (Index b = boxes.cell_box_begin[n]; b < boxes.cell_box_begin[n + 1]; ++b)
+          if (b > a && overlap(s, a, b) && !push_pair(w, a, b)) return;
+      }
+}
+
+// Sorts keyed pairs by (key, b): std::sort when few, else a least-significant-digit radix
+// sort, 8 bits a pass (b's 3 bytes, then the key's 8), stable, in O(n).
+void sort_pair_keys(Scratch::PairKey* keys, Scratch::PairKey* spare, Index count, Index* counts) {
+  auto less = [](const Scratch::PairKey& x, const Scratch::PairKey& y) {
+    return x.key < y.key || (x.key == y.key && x.pair.b < y.pair.b);
+  };
+  if (count < 2048) {
+    std::sort(keys, keys + count, less);
+    return;
+  }
+  Scratch::PairKey* from = keys;
+  Scratch::PairKey* to = spare;
+  for (int pass = 0; pass < 11; ++pass) {
+    auto digit = [pass](const Scratch::PairKey& k) -> Index {
+      return pass < 3 ? (k.pair.b >> (8 * pass)) & 0xFF : static_cast<Index>((k.key >> (8 * (pass - 3))) & 0xFF);
+    };
+    std::fill(counts, counts + 257, 0);
+    for (Index i = 0; i < count; ++i) ++counts[digit(from[i]) + 1];
+    if (counts[1] == count) continue;  // one digit value: nothing moves
+    for (int d = 0; d < 256; ++d) counts[d + 1] += counts[d];
+    for (Index i = 0; i < count; ++i) to[counts[digit(from[i])]++] = from[i];
+    std::swap(from, to);
+  }
+  if (from != keys) std::copy(from, from + count, keys);
+}
+
+}  // namespace
+
+std::int64_t hash_grid_coordinate(double x, double inv_cell) {
+  constexpr double kLimit = 4503599627370496.0;  // 2^52: beyond it cells are meaningless anyway
+  const double v = x * inv_cell;
+  if (!(v > -kLimit)) return v < 0.0 ? static_cast<std::int64_t>(-kLimit) : 0;  // -inf / NaN
+  if (!(v < kLimit)) return static_cast<std::int64_t>(kLimit);
+  // floor(v), without a call to the C library's floor on a machine without SSE4.1: below
+  // 2^52 in magnitude the truncation is exact, and one less for a negative fraction.
+  const std::int64_t t = static_cast<std::int64_t>(v);
+  return static_cast<double>(t) > v ? t - 1 : t;
+}
+
+void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, Scratch& s) {
+  const bool wake = !s.box_wake_margin.empty();
+  if (margin > 0.0 || wake)
+    for (Index b = 0; b < boxes.size(); ++b) {
+      const double grow = margin + (wake ? s.box_wake_margin[b] : 0.0);
+      for (int axis = 0; axis < 3; ++axis) {
+        s.box_lo[axis][b] -= grow;
+        s.box_hi[axis][b] += grow;
+      }
+    }
+  for (Index o = 0; o < model.objects.size(); ++o) {
+    const ObjectModel& object = model.objects[o];
+    std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    for (Index b = first_box(boxes, object); b < end_box(boxes, object); ++b)
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = std::min(lo[axis], s.box_lo[axis][b]);
+        hi[axis] = std::max(hi[axis], s.box_hi[axis][b]);
+      }
+    s.object_lo[o] = lo;
+    s.object_hi[o] = hi;
+  }
+}
+
+bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query, Scratch& s, StageCounters& counters) {
+  s.pair_count = 0;
+  s.pairs_dropped = false;
+  const Index objects = static_cast<Index>(model.objects.size());
+  auto asleep = [&](Index o) { return query.asleep && query.asleep[o]; };
+  // The work as tasks: each object's own pairs, and each pair of objects whose bounds meet.
+  Index tasks = 0;
+  auto add_task = [&](PairTask task) {
+    if (tasks == s.pair_tasks.size()) {
+      s.pairs_dropped = true;  // more object pairs than room: grown between steps
+      return;
+    }
+    s.pair_tasks[tasks++] = task;
+  };
+  if (query.self || query.neighbours)
+    for (Index o = 0; o < objects; ++o)
+      if (!asleep(o)) add_task({o, o});
+  if (query.inter && objects > 1) {
+    // Sort and sweep over the objects' bounds along x.
+    Index* order = s.object_order.data();
+    for (Index o = 0; o < objects; ++o) order[o] = o;
+    // Ordered by lower x bound (a NaN bound first: it pairs with nothing), then index.
+    auto key = [&](Index o) { return std::isnan(s.object_lo[o][0]) ? -INFINITY : s.object_lo[o][0]; };
+    std::sort(order, order + objects, [&](Index a, Index b) { return key(a) < key(b) || (key(a) == key(b) && a < b); });
+    for (Index i = 0; i < objects; ++i) {
+      const Index a = order[i];
+      for (Index j = i + 1; j < objects && s.object_lo[order[j]][0] <= s.object_hi[a][0]; ++j) {
+        const Index b = order[j];
+        if (asleep(a) && asleep(b)) continue;  // two sleepers never meet
+        if (!(s.object_lo[a][1] <= s.object_hi[b][1] && s.object_lo[b][1] <= s.object_hi[a][1] &&
+              s.object_lo[a][2] <= s.object_hi[b][2] && s.object_lo[b][2] <= s.object_hi[a][2]))
+          continue;
+        add_task({std::min(a, b), std::max(a, b)});
+      }
+    }
+  }
+  // The tasks over the pool, each thread with its own workspace. Which thread finds a pair
+  // does not matter: the pairs are sorted below.
+  for (PairWorkspace& w : s.pair_workspaces) {
+    w.pair_count = 0;
+    w.dropped = false;
+    w.entries = 0;
+  }
+  // A task a chunk where there are few (an object's self-collision is much work), eight where
+  // there are many (pairs of small letters), so that claiming a chunk costs little.
+  const Index per_chunk = tasks < 64 ? 1 : 8;
+  auto run = [&](std::uint32_t chunk, std::uint32_t thread) {
+    PairWorkspace& w = s.pair_workspaces[thread];
+    for (Index t = chunk * per_chunk; t < std::min(tasks, (chunk + 1) * per_chunk); ++t) {
+      const PairTask task = s.pair_tasks[t];
+      if (task.a != task.b) {
+        object_pairs(model, boxes, task.a, task.b, s, w);
+        continue;
+      }
+      if (query.self) self_pairs(model, boxes, model.objects[task.a], s, w);
+      if (query.neighbours) neighbour_pairs(model, boxes, model.objects[task.a], s, w);
+    }
+  };
+  const Index chunks = (tasks + per_chunk - 1) / per_chunk;
+  if (s.pool && s.pair_workspaces.size() >= static_cast<std::size_t>(s.pool->threads())) s.pool->parallel_for(chunks, run);
+  else
+    for (Index c = 0; c < chunks; ++c) run(c, 0);
+  for (const PairWorkspace& w : s.pair_workspaces) {
+    counters.hash_entries += w.entries;
+    if (w.dropped || s.pair_count + w.pair_count > s.pairs.size()) {
+      s.pairs_dropped = true;
+      continue;
+    }
+    std::copy(w.pairs.begin(), w.pairs.begin() + w.pair_count, s.pairs.begin() + s.pair_count);
+    s.pair_count += w.pair_count;
+  }
+  // The narrow phase answers the pairs in this order: the order in which the paper's
+  // spatial hash visits them (Teschner et al. 2003: the hash of the grid cell that holds the
+  // lower corner of their overlap, in T buckets of cells as large as the largest lattice
+  // cell; then by box). It has no direction in space: box order alone would sweep every
+  // contact region from its lowest cells up, and the pairs answered first take the rebound
+  // (two spheres meeting head on leave skewed).
+  if (!query.ordered) return !s.pairs_dropped;
+  const double inv_cell = 1.0 / hash_order_cell(model);
+  const Index table = static_cast<Index>(std::max<std::size_t>(4000, 2 * boxes.size()));
+  // Within a bucket the hash holds box a's cells in its z, y, x order: a pair comes after
+  // a's pairs in earlier cells of a that share the bucket (a hash collision), then by box b.
+  // One 64-bit key per pair: bucket (24 bits), box a (24), a's cell rank (16); then box b.
+  for (Index p = 0; p < s.pair_count; ++p) {
+    const BoxPair& pair = s.pairs[p];
+    std::int64_t g[3], first[3], span[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      g[axis] = hash_grid_coordinate(std::max(s.box_lo[axis][pair.a], s.box_lo[axis][pair.b]), inv_cell);
+      first[axis] = hash_grid_coordinate(s.box_lo[axis][pair.a], inv_cell);
+      span[axis] = hash_grid_coordinate(s.box_hi[axis][pair.a], inv_cell) - first[axis] + 1;
+    }
+    const std::uint64_t bucket = spatial_hash(g[0], g[1], g[2], table);
+    const std::int64_t rank = ((g[2] - first[2]) * span[1] + (g[1] - first[1])) * span[0] + (g[0] - first[0]);
+    s.pair_keys[p] = {bucket << 40 | static_cast<std::uint64_t>(pair.a) << 16 |
+                          static_cast<std::uint64_t>(std::clamp<std::int64_t>(rank, 0, 0xFFFF)),
+                      pair};
+  }
+  sort_pair_keys(s.pair_keys.data(), s.pair_sorted_keys.data(), s.pair_count, s.radix_count.data());
+  for (Index p = 0; p < s.pair_count; ++p) s.pairs[p] = s.pair_keys[p].pair;
+  return !s.pairs_dropped;
+}
+
+bool find_candidate_pairs(const Model& model, const BoxLevel& level, const State& state, Scratch& s,
+                          StageCounters& counters) {
+  PairQuery query;
+  query.inter = has(model.settings.effects, Effect::InterCollision);
+  query.self = has(model.settings.effects, Effect::SelfCollision);
+  // Objects asleep are paired too: the narrow phase passes over a pair of two sleepers as it
+  // comes to it, since a pair answered before may have woken one of them.
+  (void)state;
+  return find_pairs(model, *level.boxes, query, s, counters);
+}
+
+}  // namespace ffd
+
+// ---- BroadPhase (ffd/broad_phase.h) ----
+#include "ffd/broad_phase.h"
+
+namespace ffd {
+
+BroadPhase::BroadPhase(const Model& model) : model_(model), scratch_(make_scratch(model)) {}
+
+void BroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& boxes) {
+  if (boxes.size() != model_.box_count()) throw std::invalid_argument("BroadPhase::set_boxes: box count differs from the model's");
+  std::copy(boxes.begin(), boxes.end(), scratch_.box_nodes.begin());
+}
+
+bool BroadPhase::find(bool neighbours, std::vector<std::pair<Index, Index>>& pairs) {
+  const Index count = static_cast<Index>(model_.box_count());
+  for (Index b = 0; b < count; ++b) {
+    const std::array<Vec3, 9>& nodes = scratch_.box_nodes[b];
+    Vec3 lo = nodes[0], hi = nodes[0];
+    for (int k = 1; k < 9; ++k) {
+      lo = lo.cwiseMin(nodes[k]);
+      hi = hi.cwiseMax(nodes[k]);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      scratch_.box_lo[axis][b] = lo[axis];
+      scratch_.box_hi[axis][b] = hi[axis];
+    }
+  }
+  grow_box_bounds(model_, model_.boxes, 0.0, scratch_);
+  PairQuery query;
+  query.inter = query.self = true;
+  query.neighbours = neighbours;
+  query.ordered = !neighbours;  // every pair, as a general broad phase reports them: no order
   StageCounters counters;
-  StepReport report;
-  report.hash_overflow = !build_spatial_hash(model_, model_.box_count(), 0.0, model_.hash_table_size, scratch_, counters);
-  broad_phase_pairs(model_, scratch_, pairs);
-  if (report.hash_overflow) grow_scratch(model_, scratch_, report);
-  return !report.hash_overflow;
+  const bool complete = find_pairs(model_, model_.boxes, query, scratch_, counters);
+  pairs.resize(scratch_.pair_count);
+  for (Index p = 0; p < scratch_.pair_count; ++p) pairs[p] = {scratch_.pairs[p].a, scratch_.pairs[p].b};
+  if (!complete) {
+    StepReport last;
+    last.hash_overflow = true;
+    grow_scratch(model_, scratch_, last);
+  }
+  return complete;
+}
+
+bool BroadPhase::find_all_pairs(std::vector<std::pair<Index, Index>>& pairs) { return find(true, pairs); }
+bool BroadPhase::find_wanted_pairs(std::vector<std::pair<Index, Index>>& pairs) { return find(false, pairs); }
+
+Vec3 BroadPhase::box_min(Index b) const {
+  return Vec3(scratch_.box_lo[0][b], scratch_.box_lo[1][b], scratch_.box_lo[2][b]);
+}
+Vec3 BroadPhase::box_max(Index b) const {
+  return Vec3(scratch_.box_hi[0][b], scratch_.box_hi[1][b], scratch_.box_hi[2][b]);
 }
 
 }  // namespace ffd

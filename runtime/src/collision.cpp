@@ -7,46 +7,62 @@
 #include "ffd/closest_point.h"
 #include "ffd/response.h"
 #include "ffd/trilinear.h"
+#include "ffd/worker_pool.h"
+#include "kernels/box_kernels.h"
 #include "sleep.h"
 
 namespace ffd {
 
 BoxLevel box_level(const Model& model, Accuracy accuracy) {
   switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, model.hash_table_size};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, model.hash_table_size};
-    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, model.hash_table_size};
-    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, model.hash_table_size};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, model.sub_box_hash_table_size};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, model.hash_table_size};
+    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false};
+    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false};
+    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false};
+    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true};
   }
-  return {&model.boxes, 0, 9, false, false, model.hash_table_size};
+  return {&model.boxes, 0, 9, false, false};
 }
 
-void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b) {
-  const std::array<Index, 8>& corner = model.cell_nodes[boxes.box_cell[b]];
-  const std::array<Vec3, 9>& local = boxes.box_local[b];
-  std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
-  for (int k = 0; k < 9; ++k) nodes[k] = trilinear_map(local[k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
-  scratch.box_valid[b] = 1;
+namespace {
+BoxOutput box_output(Scratch& scratch, bool bounds) {
+  BoxOutput out{scratch.box_nodes.data(), {nullptr, nullptr, nullptr}, {nullptr, nullptr, nullptr}, scratch.box_valid.data()};
+  if (bounds)
+    for (int axis = 0; axis < 3; ++axis) {
+      out.lo[axis] = scratch.box_lo[axis].data();
+      out.hi[axis] = scratch.box_hi[axis].data();
+    }
+  return out;
+}
+}  // namespace
+
+void update_box(const Model&, const BoxSet& boxes, const State& state, Scratch& scratch, Index b) {
+  // The AABB too: the planes' early-out reads it (it stays grown by no broad-phase margin).
+  update_one_box(boxes, b, state.x.data()->data(), box_output(scratch, true));
 }
 
-void update_boxes(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch) {
-  for (Index b = 0; b < boxes.size(); ++b) update_box(model, boxes, state, scratch, b);
-}
-
-std::int64_t hash_grid_coordinate(double x, double inv_cell) {
-  constexpr double kLimit = 4503599627370496.0;  // 2^52: beyond it cells are meaningless anyway
-  const double g = std::floor(x * inv_cell);
-  if (!(g > -kLimit)) return g < 0.0 ? static_cast<std::int64_t>(-kLimit) : 0;  // -inf / NaN
-  if (!(g < kLimit)) return static_cast<std::int64_t>(kLimit);
-  return static_cast<std::int64_t>(g);
+void update_boxes(const Model&, const BoxSet& boxes, const State& state, Scratch& scratch) {
+  const BoxOutput out = box_output(scratch, true);
+  const double* x = state.x.data()->data();
+  const Index blocks = static_cast<Index>(boxes.block_count());
+  constexpr Index kBlocksPerChunk = 64;  // 256 boxes: a few microseconds of work
+  const Index chunks = (blocks + kBlocksPerChunk - 1) / kBlocksPerChunk;
+  auto run = [&](std::uint32_t chunk, std::uint32_t) {
+    update_box_blocks(boxes, chunk * kBlocksPerChunk, std::min(blocks, (chunk + 1) * kBlocksPerChunk), x, out);
+  };
+  if (scratch.pool) scratch.pool->parallel_for(chunks, run);
+  else
+    for (Index c = 0; c < chunks; ++c) run(c, 0);
 }
 
 void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell) {
   for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
     const Index c = model.cell_neighbours[i];
-    for (Index b = boxes.cell_box_begin[c]; b < boxes.cell_box_begin[c + 1]; ++b) scratch.box_valid[b] = 0;
+    for (Index b = boxes.cell_box_begin[c]; b < boxes.cell_box_begin[c + 1]; ++b) {
+      scratch.box_valid[b] = 0;
+      scratch.box_moved[b] = 1;
+    }
   }
 }
 
@@ -378,108 +394,20 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   invalidate_surface_around(model, scratch, cell_b);
 }
 
-// Visits every pair of boxes whose hash-time AABBs overlap and that `wanted` accepts, once:
-// a pair is taken only in the hash cell that holds the lower corner of the overlap of the
-// two AABBs, and entries of other grid cells sharing the bucket (hash collisions) are
-// skipped. `wanted` runs first because most pairs in a bucket are neighbouring cells of one
-// object, which it rejects from two integers.
-template <class WantedFn, class PairFn>
-void for_each_candidate_pair(const Model& model, const Scratch& scratch, WantedFn&& wanted, PairFn&& visit) {
-  const double inv_cell = 1.0 / model.hash_cell_size;
-  for (Index bucket = 0; bucket < scratch.hash_table_size; ++bucket) {
-    const Index begin = scratch.bucket_begin[bucket], end = scratch.bucket_begin[bucket + 1];
-    for (Index i = begin; i < end; ++i) {
-      const Scratch::HashEntry& e1 = scratch.entries[i];
-      for (Index j = i + 1; j < end; ++j) {
-        const Scratch::HashEntry& e2 = scratch.entries[j];
-        if (e1.gx != e2.gx || e1.gy != e2.gy || e1.gz != e2.gz) continue;
-        const Index b1 = std::min(e1.box, e2.box), b2 = std::max(e1.box, e2.box);
-        if (!wanted(b1, b2)) continue;
-        const Vec3 lo = scratch.box_min[b1].cwiseMax(scratch.box_min[b2]);
-        const Vec3 hi = scratch.box_max[b1].cwiseMin(scratch.box_max[b2]);
-        if ((lo.array() > hi.array()).any()) continue;
-        if (hash_grid_coordinate(lo.x(), inv_cell) != e1.gx || hash_grid_coordinate(lo.y(), inv_cell) != e1.gy ||
-            hash_grid_coordinate(lo.z(), inv_cell) != e1.gz)
-          continue;
-        visit(b1, b2);
-      }
-    }
-  }
-}
-
 }  // namespace
-
-bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Index table_size, Scratch& scratch,
-                        StageCounters& counters) {
-  const double inv_cell = 1.0 / model.hash_cell_size;
-  const Index table = table_size;
-  scratch.hash_table_size = table;
-  const std::size_t capacity = scratch.entries.size();
-  std::size_t count = 0;
-  bool fits = true;
-  for (Index b = 0; b < box_count && fits; ++b) {
-    const std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
-    Vec3 lo = nodes[0], hi = nodes[0];
-    for (int k = 1; k < 9; ++k) {
-      lo = lo.cwiseMin(nodes[k]);
-      hi = hi.cwiseMax(nodes[k]);
-    }
-    const double grow = margin + (scratch.box_wake_margin.empty() ? 0.0 : scratch.box_wake_margin[b]);
-    if (grow > 0.0) {
-      lo -= Vec3::Constant(grow);
-      hi += Vec3::Constant(grow);
-    }
-    scratch.box_min[b] = lo;
-    scratch.box_max[b] = hi;
-    const std::int64_t x0 = hash_grid_coordinate(lo.x(), inv_cell), x1 = hash_grid_coordinate(hi.x(), inv_cell);
-    const std::int64_t y0 = hash_grid_coordinate(lo.y(), inv_cell), y1 = hash_grid_coordinate(hi.y(), inv_cell);
-    const std::int64_t z0 = hash_grid_coordinate(lo.z(), inv_cell), z1 = hash_grid_coordinate(hi.z(), inv_cell);
-    // Unsigned spans: a box stretched over absurdly many cells cannot overflow the count.
-    const double cells = (static_cast<double>(x1 - x0) + 1.0) * (static_cast<double>(y1 - y0) + 1.0) *
-                         (static_cast<double>(z1 - z0) + 1.0);
-    if (!(cells <= static_cast<double>(capacity - count))) {
-      fits = false;
-      break;
-    }
-    for (std::int64_t z = z0; z <= z1; ++z)
-      for (std::int64_t y = y0; y <= y1; ++y)
-        for (std::int64_t x = x0; x <= x1; ++x) {
-          scratch.entries_unsorted[count] = {b, x, y, z};
-          scratch.entry_bucket[count] = spatial_hash(x, y, z, table);
-          ++count;
-        }
-  }
-  // Counting sort by bucket; stable, so entries of a bucket stay in box order.
-  std::fill(scratch.bucket_begin.begin(), scratch.bucket_begin.end(), 0);
-  for (std::size_t i = 0; i < count; ++i) ++scratch.bucket_begin[scratch.entry_bucket[i] + 1];
-  for (Index t = 0; t < table; ++t) scratch.bucket_begin[t + 1] += scratch.bucket_begin[t];
-  // bucket_begin[t] is now the start of bucket t; fill using a running cursor per bucket
-  // kept in the next slot's value, then shift back.
-  for (std::size_t i = 0; i < count; ++i) {
-    const Index t = scratch.entry_bucket[i];
-    scratch.entries[scratch.bucket_begin[t]++] = scratch.entries_unsorted[i];
-  }
-  for (Index t = table; t > 0; --t) scratch.bucket_begin[t] = scratch.bucket_begin[t - 1];
-  scratch.bucket_begin[0] = 0;
-  counters.hash_entries = static_cast<std::uint32_t>(count);
-  return fits;
-}
 
 namespace {
 
-// Pairs the narrow phase wants: boxes of different objects with inter-collision on; boxes of
-// one object with self-collision on whose cells share no lattice node (those touch by
-// construction); never two boxes of objects asleep.
-auto wanted_pairs(const Model& model, const BoxSet& boxes, const State& state) {
-  const bool inter = has(model.settings.effects, Effect::InterCollision);
-  const bool self = has(model.settings.effects, Effect::SelfCollision);
-  return [&model, &boxes, &state, inter, self](Index b1, Index b2) {
-    const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
-    const Index o1 = model.cell_object[c1], o2 = model.cell_object[c2];
-    if (state.asleep[o1] && state.asleep[o2]) return false;
-    if (o1 != o2) return inter;
-    return self && !cells_share_node(model, c1, c2);
-  };
+// Whether a tested node of `mover` lies inside `container` (read-only: the detection half of
+// test_nodes).
+bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+                  Index container) {
+  const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+  if (planes.degenerate) return false;
+  const int node_count = tested_node_count(level);
+  for (int k = 0; k < node_count; ++k)
+    if (node_in_box(planes, tested_node(model, level, state, scratch, mover, k)).inside) return true;
+  return false;
 }
 
 }  // namespace
@@ -488,17 +416,56 @@ template <bool kFriction>
 void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
                    double& max_depth) {
   const BoxSet& boxes = *level.boxes;
-  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
+  const Index pairs = scratch.pair_count;
+  // Detection, read-only and in parallel: which pairs have a node of one box in the other.
+  // (A pair of two sleepers is not looked at; should one of them wake before its turn, it is
+  // tested then.)
+  constexpr Index kPairsPerChunk = 32;
+  auto detect = [&](std::uint32_t chunk, std::uint32_t) {
+    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
+      const BoxPair& pair = scratch.pairs[p];
+      const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
+      scratch.pair_hit[p] = (state.asleep[o1] && state.asleep[o2]) ||
+                            nodes_inside(model, level, state, scratch, pair.a, pair.b) ||
+                            nodes_inside(model, level, state, scratch, pair.b, pair.a);
+    }
+  };
+  // The detection costs what testing every pair costs, spread over the threads; it pays where
+  // few pairs need testing again after it: with T threads, fewer than 1 - 1/T of them (the
+  // share of the last step). Either way the result is the same: without it, every pair is
+  // tested in the response loop below, as Algorithm 1 does.
+  const int threads = scratch.pool ? scratch.pool->threads() : 1;
+  const bool detecting = threads > 1 && scratch.narrow_retested_share < 1.0 - 1.0 / threads;
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  if (detecting) {
+    scratch.pool->parallel_for(chunks, detect);
+    counters.node_tests += 2 * tested_node_count(level) * pairs;
+  } else {
+    std::fill(scratch.pair_hit.begin(), scratch.pair_hit.begin() + pairs, std::uint8_t{1});
+  }
+  Index retested = 0;
+  // Response, in pair order: Algorithm 1, each pair tested as the earlier responses left it
+  // (a response moves nodes, and with them the boxes around). A pair whose boxes no response
+  // has moved since the detection is as the detection found it: without a hit there, it has
+  // none now either, and is passed over. So the result is Algorithm 1's in this order.
+  std::fill(scratch.box_moved.begin(), scratch.box_moved.begin() + boxes.size(), std::uint8_t{0});
+  for (Index p = 0; p < pairs; ++p) {
+    const Index b1 = scratch.pairs[p].a, b2 = scratch.pairs[p].b;
     const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
-    if (sleeping(model)) meet(state, object_1, object_2);
+    if (state.asleep[object_1] && state.asleep[object_2]) continue;  // two sleepers never meet
+    if (sleeping(model)) meet(state, object_1, object_2);  // a moving object wakes a sleeper it meets
     const bool same_object = object_1 == object_2;
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
+    if (!scratch.pair_hit[p] && !scratch.box_moved[b1] && !scratch.box_moved[b2]) continue;
+    ++retested;
     ensure_box(model, boxes, state, scratch, b1, counters);
     ensure_box(model, boxes, state, scratch, b2, counters);
     test_nodes<kFriction>(model, level, state, scratch, b1, b2, same_object, counters, max_depth);
     test_nodes<kFriction>(model, level, state, scratch, b2, b1, same_object, counters, max_depth);
-  });
+  }
+  if (detecting || pairs == 0) scratch.narrow_retested_share = pairs ? static_cast<double>(retested) / pairs : 0.0;
+  else scratch.narrow_retested_share *= 0.9;  // try the detection again now and then
 }
 
 template <bool kFriction>
@@ -506,15 +473,16 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
   const BoxSet& boxes = model.boxes;
   std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
   scratch.surface_step_epoch = ++scratch.surface_epoch;
-  for_each_candidate_pair(model, scratch, wanted_pairs(model, boxes, state), [&](Index b1, Index b2) {
-    const Index c1 = boxes.box_cell[b1], c2 = boxes.box_cell[b2];
+  for (Index p = 0; p < scratch.pair_count; ++p) {
+    const Index c1 = boxes.box_cell[scratch.pairs[p].a], c2 = boxes.box_cell[scratch.pairs[p].b];
+    if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
     if (sleeping(model)) meet(state, model.cell_object[c1], model.cell_object[c2]);
     const bool same_object = model.cell_object[c1] == model.cell_object[c2];
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
     test_vertices<kFriction>(model, state, scratch, c1, c2, same_object, counters, max_depth);
     test_vertices<kFriction>(model, state, scratch, c2, c1, same_object, counters, max_depth);
-  });
+  }
 }
 
 template <bool kFriction>
@@ -528,6 +496,12 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
       const Index cell = boxes.box_cell[b];
       if (state.asleep[model.cell_object[cell]]) continue;  // frozen where it rests
       ensure_box(model, boxes, state, scratch, b, counters);
+      // The box's AABB bounds its nodes (and level 3's surface nodes): if its lowest corner
+      // along the normal is above the plane, so is every node.
+      double support = -plane.offset;
+      for (int axis = 0; axis < 3; ++axis)
+        support += plane.normal[axis] * (plane.normal[axis] > 0.0 ? scratch.box_lo[axis][b] : scratch.box_hi[axis][b]);
+      if (!level.exact && support >= 0.0) continue;
       if (level.samples) {
         // The surface nodes lie in the box, and trilinear FFD (eq. 2) maps a point of the box
         // into the hull of its 8 mapped corners: a box with every corner above the plane has
@@ -571,18 +545,6 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
       ensure_box(model, boxes, state, scratch, b, counters);
     }
   }
-}
-
-void broad_phase_pairs(const Model& model, const Scratch& scratch, std::vector<std::pair<Index, Index>>& pairs) {
-  pairs.clear();
-  for_each_candidate_pair(
-      model, scratch, [](Index, Index) { return true; }, [&](Index a, Index b) { pairs.emplace_back(a, b); });
-}
-
-std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch) {
-  std::vector<std::pair<Index, Index>> pairs;
-  broad_phase_pairs(model, scratch, pairs);
-  return pairs;
 }
 
 template void collide_boxes<true>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);

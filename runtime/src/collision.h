@@ -1,5 +1,5 @@
 #pragma once
-// Collision stages: FFD AABB update (section 4), spatial-hash broad phase (6.1), node-in-box
+// Collision stages: FFD AABB update (section 4), broad phase (6.1), node-in-box
 // narrow phase with immediate response (6.2, 7, Algorithm 1) and static planes, at the
 // accuracy level the State asks for (spec.h, Accuracy).
 #include "ffd/model.h"
@@ -15,7 +15,6 @@ struct BoxLevel {
   int end_node;
   bool samples;      // also Model::box_samples, the surface nodes (level 3)
   bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
-  Index hash_table_size;  // buckets of the broad phase for these boxes
 };
 BoxLevel box_level(const Model& model, Accuracy accuracy);
 
@@ -38,7 +37,7 @@ void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch
 Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
 
 // Teschner et al. 2003: hash of integer grid coordinates (two's complement wrap for
-// negative ones) into `table_size` buckets.
+// negative ones) into `table_size` buckets. It orders the narrow phase's pairs (broad_phase.cpp).
 inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Index table_size) {
   const std::uint64_t h = (static_cast<std::uint64_t>(gx) * 73856093ull) ^
                           (static_cast<std::uint64_t>(gy) * 19349663ull) ^
@@ -50,14 +49,37 @@ inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Ind
 // and maps NaN to 0, so no input is undefined behaviour.
 std::int64_t hash_grid_coordinate(double x, double inv_cell);
 
-// Fills scratch.bucket_begin / entries (`table_size` buckets) from the current nodes of the
-// first `box_count` boxes, each AABB widened by `margin` (m). Returns false when the entry buffer was too
-// small (the boxes that did not fit are left out of this step).
-bool build_spatial_hash(const Model& model, std::size_t box_count, double margin, Index table_size, Scratch& scratch,
-                        StageCounters& counters);
+// Cells of a broad-phase grid at most (a coarser grid covers a larger region).
+inline constexpr Index kBroadPhaseGridCells = 1 << 18;
 
-// Algorithm 1 over the hash table: each overlapping box pair once, nodes of each box tested
-// against the other, response applied and both boxes updated at once.
+// First and last box of `object` in `boxes` (boxes are stored in cell order).
+inline Index first_box(const BoxSet& boxes, const ObjectModel& object) { return boxes.cell_box_begin[object.cell_begin]; }
+inline Index end_box(const BoxSet& boxes, const ObjectModel& object) { return boxes.cell_box_begin[object.cell_end]; }
+
+// The broad phase (broad_phase.cpp): first the boxes' AABBs (from the box update) grown by
+// `margin` and the wake margins, and each object's bounds; then every pair of boxes the
+// narrow phase wants (boxes of different objects, or of one object's cells that share no
+// lattice node, as the effects ask; never two sleepers) whose AABBs overlap, once each,
+// sorted, into scratch.pairs. Returns false when the buffers were too small (pairs are
+// then missing this step; grow_scratch() makes room between steps).
+void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, Scratch& scratch);
+// What find_pairs looks for: pairs of boxes of different objects (inter), of one object's
+// cells that share no lattice node (self), of one object's cells that do (neighbours: what
+// a general broad phase reports too, for the race against FCL); objects asleep (per object,
+// may be null) pair with nothing but awake objects' boxes.
+struct PairQuery {
+  bool inter = false, self = false, neighbours = false;
+  const std::uint8_t* asleep = nullptr;
+  bool ordered = true;  // in the order the narrow phase answers them (else as found)
+};
+bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query, Scratch& scratch,
+                StageCounters& counters);
+bool find_candidate_pairs(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
+                          StageCounters& counters);
+
+// Algorithm 1 over the candidate pairs: the pairs with a node of one box inside the other are
+// found first (read-only, in parallel); then in pair order each is tested again and answered
+// at once, both boxes updated.
 template <bool kFriction>
 void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
                    double& max_depth);
@@ -73,10 +95,5 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
 template <bool kFriction>
 void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
                     double& max_depth);
-
-// Candidate pairs the broad phase yields (each once), for tests and tools: (box a < box b).
-std::vector<std::pair<Index, Index>> broad_phase_pairs(const Model& model, Scratch& scratch);
-// The same into `pairs` (cleared first): no allocation once it has the capacity.
-void broad_phase_pairs(const Model& model, const Scratch& scratch, std::vector<std::pair<Index, Index>>& pairs);
 
 }  // namespace ffd

@@ -79,7 +79,6 @@ void validate(const SceneSpec& spec) {
   require(is_finite(s.gravity), "simulation.gravity", "must be finite");
   require(s.alpha >= 0.0 && s.alpha <= 1.0, "simulation.alpha", "must be in [0, 1] (got " + fmt(s.alpha) + ")");
   require(s.beta >= 0.0 && s.beta <= 1.0, "simulation.beta", "must be in [0, 1] (got " + fmt(s.beta) + ")");
-  require(s.hash_table_size >= 1, "simulation.hash_table_size", "must be >= 1");
   require(std::isfinite(s.hash_cell_size) && s.hash_cell_size >= 0.0, "simulation.hash_cell_size", "must be >= 0 m");
   require(s.min_box_thickness >= 0.0 && s.min_box_thickness <= 1.0, "simulation.min_box_thickness", "must be in [0, 1]");
   require(static_cast<int>(s.accuracy) < kAccuracyLevels, "simulation.accuracy", "must be in 0..5");
@@ -133,12 +132,34 @@ std::vector<std::pair<int, int>> cell_spring_pairs() {
   return pairs;
 }
 
+// BoxSet::kernel_local and kernel_corner from box_local and the cells' nodes.
+void fill_kernel_layout(const Model& model, BoxSet& set) {
+  const std::size_t blocks = set.block_count();
+  set.kernel_local.assign(blocks * 9 * kBoxLanes, 0.0);
+  set.kernel_corner.assign(blocks * 8 * kBoxLanes, 0);
+  set.box_lattice.resize(set.size());
+  for (std::size_t b = 0; b < set.size(); ++b) set.box_lattice[b] = model.cell_coord[set.box_cell[b]];
+  for (std::size_t block = 0; block < blocks; ++block)
+    for (Index lane = 0; lane < kBoxLanes; ++lane) {
+      const std::size_t b = std::min(block * kBoxLanes + lane, set.size() - 1);
+      const std::array<Vec3, 9>& local = set.box_local[b];
+      for (int axis = 0; axis < 3; ++axis) {
+        set.kernel_local[(block * 9 + axis) * kBoxLanes + lane] = local[0][axis];
+        set.kernel_local[(block * 9 + 3 + axis) * kBoxLanes + lane] = local[7][axis];
+        set.kernel_local[(block * 9 + 6 + axis) * kBoxLanes + lane] = local[8][axis];
+      }
+      for (int j = 0; j < 8; ++j)
+        set.kernel_corner[(block * 8 + j) * kBoxLanes + lane] = 3 * static_cast<std::int64_t>(model.cell_nodes[set.box_cell[b]][j]);
+    }
+}
+
 // Gauss-Seidel order for the springs: greedy colouring so that springs of one colour share
 // no node, then colour by colour. Consecutive projections are then independent and the CPU
 // overlaps them (a node-sorted order chains every projection on the previous one). The
 // order is a pure function of the lattice, so runs stay deterministic.
-std::vector<std::pair<Index, Index>> order_springs_by_colour(const std::vector<std::pair<Index, Index>>& pairs,
-                                                            std::size_t node_count) {
+// Appends the springs of `pairs` to model.springs in that order, and their colours to
+// model.spring_colours.
+void order_springs_by_colour(Model& model, const std::vector<std::pair<Index, Index>>& pairs, std::size_t node_count) {
   std::vector<std::uint64_t> used(node_count, 0);  // bit c: node already in colour c (c < 64)
   std::vector<int> colour(pairs.size());
   int colours = 0;
@@ -151,12 +172,16 @@ std::vector<std::pair<Index, Index>> order_springs_by_colour(const std::vector<s
     used[pairs[s].second] |= std::uint64_t{1} << c;
     colours = std::max(colours, c + 1);
   }
-  std::vector<std::pair<Index, Index>> ordered;
-  ordered.reserve(pairs.size());
-  for (int c = 0; c < colours; ++c)
+  for (int c = 0; c < colours; ++c) {
+    SpringColour range{static_cast<Index>(model.springs.size()), 0, c < 63};
     for (std::size_t s = 0; s < pairs.size(); ++s)
-      if (colour[s] == c) ordered.push_back(pairs[s]);
-  return ordered;
+      if (colour[s] == c) {
+        const auto [a, b] = pairs[s];
+        model.springs.push_back({a, b, (model.node_rest[a] - model.node_rest[b]).norm()});
+      }
+    range.end = static_cast<Index>(model.springs.size());
+    if (range.end > range.begin) model.spring_colours.push_back(range);
+  }
 }
 
 Mat3 rotation_from_degrees(const Vec3& deg) {
@@ -282,6 +307,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
 
     // Springs (mass-spring objects): every corner pair of every cell, once per node pair.
     obj.spring_begin = static_cast<Index>(model.springs.size());
+    obj.colour_begin = static_cast<Index>(model.spring_colours.size());
     if (o.dynamics == DynamicsKind::MassSpring) {
       std::vector<std::pair<Index, Index>> pairs;
       for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
@@ -291,10 +317,10 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
         }
       std::sort(pairs.begin(), pairs.end());
       pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-      for (const auto& [a, b] : order_springs_by_colour(pairs, model.node_rest.size()))
-        model.springs.push_back({a, b, (model.node_rest[a] - model.node_rest[b]).norm()});
+      order_springs_by_colour(model, pairs, model.node_rest.size());
     }
     obj.spring_end = static_cast<Index>(model.springs.size());
+    obj.colour_end = static_cast<Index>(model.spring_colours.size());
 
     // Volume constraints (mass-spring objects with a bulk modulus): the six tetrahedra of
     // each cell's Kuhn split, around its diagonal from corner 0 to corner 7.
@@ -369,12 +395,19 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     model.objects.push_back(std::move(obj));
   }
 
-  for (BoxSet* set : {&model.boxes, &model.grid_boxes, &model.sub_boxes})
+  for (BoxSet* set : {&model.boxes, &model.grid_boxes, &model.sub_boxes}) {
     set->cell_box_begin.push_back(static_cast<Index>(set->size()));
+    fill_kernel_layout(model, *set);
+  }
   build_exact_surfaces(model, lattice_triangles);
 
   model.node_inv_mass.resize(model.node_mass.size());
   for (std::size_t n = 0; n < model.node_mass.size(); ++n) model.node_inv_mass[n] = 1.0 / model.node_mass[n];
+  for (const Spring& spring : model.springs) {
+    model.spring_node_a.push_back(spring.a);
+    model.spring_node_b.push_back(spring.b);
+    model.spring_rest_length.push_back(spring.rest_length);
+  }
   model.node_region_count.assign(model.node_rest.size(), 0);
   for (Index m : model.region_members) ++model.node_region_count[m];
 
@@ -410,15 +443,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   if (box_box) {
     model.pipeline.push_back(Stage::BroadPhase);
     model.pipeline.push_back(Stage::NarrowPhase);
-    // Paper: 4000 buckets. Large scenes get at least two buckets per box so chains stay short.
-    model.hash_table_size = static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.box_count()));
-    // Level 4 has several boxes a cell: its own, larger table keeps the chains as short
-    // (the other levels keep theirs, and with it the order in which pairs are answered).
-    model.sub_box_hash_table_size =
-        static_cast<Index>(std::max<std::size_t>(spec.settings.hash_table_size, 2 * model.sub_boxes.size()));
-    double largest_cell = 0.0;
-    for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
-    model.hash_cell_size = spec.settings.hash_cell_size > 0.0 ? spec.settings.hash_cell_size : largest_cell;
+    model.collides = true;
   }
   if (planes) model.pipeline.push_back(Stage::Planes);
   if (probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::Interaction);

@@ -1,5 +1,8 @@
 #include "dynamics.h"
 
+#include "ffd/worker_pool.h"
+#include "kernels/spring_kernels.h"
+
 #include <cmath>
 
 namespace ffd {
@@ -49,6 +52,8 @@ void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, do
 // XPBD (Macklin et al. 2016) on distance constraints with compliance 1/k and Rayleigh-like
 // constraint damping: implicit in effect, so stable for every stiffness at the fixed dt.
 // The stiffness is the object's live value in State::params, so it can be tuned between steps.
+// Gauss-Seidel colour by colour; a colour's springs share no node and go through the SIMD
+// kernel several at a time, with the result of one after the other.
 void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
                            Scratch& scratch) {
   const double dt = model.settings.dt;
@@ -70,23 +75,21 @@ void integrate_mass_spring(const Model& model, const ObjectModel& obj, double st
     scratch.denominator_stiffness[object] = stiffness;
   }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
+  const SpringSolve solve{state.x.data()->data(),
+                          scratch.x_prev.data()->data(),
+                          model.node_inv_mass.data(),
+                          model.spring_node_a.data(),
+                          model.spring_node_b.data(),
+                          model.spring_rest_length.data(),
+                          scratch.lambda.data(),
+                          scratch.spring_inv_denominator.data(),
+                          alpha_tilde,
+                          gamma};
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) scratch.tetrahedron_lambda[t] = 0.0;
   for (int it = 0; it < p.iterations; ++it) {
-    for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
-      const Spring& spring = model.springs[s];
-      Vec3& xa = state.x[spring.a];
-      Vec3& xb = state.x[spring.b];
-      const Vec3 d = xa - xb;
-      const double len = d.norm();
-      if (!(len > 1e-12)) continue;  // coincident nodes: no direction to push along
-      const Vec3 grad = d * (1.0 / len);
-      const double wa = model.node_inv_mass[spring.a], wb = model.node_inv_mass[spring.b];
-      const double C = len - spring.rest_length;
-      const double damping_term = gamma * grad.dot((xa - scratch.x_prev[spring.a]) - (xb - scratch.x_prev[spring.b]));
-      const double dlambda = (-C - alpha_tilde * scratch.lambda[s] - damping_term) * scratch.spring_inv_denominator[s];
-      scratch.lambda[s] += dlambda;
-      xa += (wa * dlambda) * grad;
-      xb -= (wb * dlambda) * grad;
+    for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
+      const SpringColour& colour = model.spring_colours[c];
+      project_springs(solve, colour.begin, colour.end, colour.independent);
     }
     for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
       project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), scratch.tetrahedron_lambda[t], state);
@@ -139,13 +142,21 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
 }  // namespace
 
 void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
-  for (std::size_t i = 0; i < model.objects.size(); ++i) {
-    if (state.asleep[i]) continue;  // frozen (sleep.h)
+  // Objects are independent: one task each, the largest first, spread over the pool. Each
+  // object's result is the same whichever thread solves it.
+  Index tasks = 0;
+  for (Index i : scratch.objects_by_work)
+    if (!state.asleep[i]) scratch.object_tasks[tasks++] = i;  // an object asleep is frozen (sleep.h)
+  auto integrate = [&](std::uint32_t task, std::uint32_t) {
+    const Index i = scratch.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     const double stiffness = state.params.stiffness[i];
     if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, scratch);
     else integrate_shape_matching(model, obj, stiffness, state, scratch);
-  }
+  };
+  if (scratch.pool) scratch.pool->parallel_for(tasks, integrate);
+  else
+    for (Index t = 0; t < tasks; ++t) integrate(t, 0);
 }
 
 }  // namespace ffd

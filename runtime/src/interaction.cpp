@@ -107,16 +107,14 @@ void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& 
   probe.x += dt * probe.v;
 
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
-  const Vec3 reach = Vec3::Constant(settings.radius);
+  const Vec3 lo = probe.x - Vec3::Constant(settings.radius), hi = probe.x + Vec3::Constant(settings.radius);
   for (Index b = 0; b < boxes.size(); ++b) {
+    // The box's AABB (Scratch::box_lo/hi) is kept with its nodes: by the box update, by
+    // ensure_box, and grown, never shrunk, by the broad phase's margins.
     ensure_box(model, boxes, state, scratch, b, counters);
-    const std::array<Vec3, 9>& nodes = scratch.box_nodes[b];
-    Vec3 lo = nodes[0], hi = nodes[0];
-    for (int i = 1; i < 9; ++i) {
-      lo = lo.cwiseMin(nodes[i]);
-      hi = hi.cwiseMax(nodes[i]);
-    }
-    if (((probe.x - reach).array() > hi.array()).any() || ((probe.x + reach).array() < lo.array()).any()) continue;
+    if (lo.x() > scratch.box_hi[0][b] || lo.y() > scratch.box_hi[1][b] || lo.z() > scratch.box_hi[2][b] ||
+        hi.x() < scratch.box_lo[0][b] || hi.y() < scratch.box_lo[1][b] || hi.z() < scratch.box_lo[2][b])
+      continue;
     probe_against_box(model, boxes, state, scratch, b, beta, counters, max_depth);
   }
   probe.force = k * (probe.x - probe.device) + c * (probe.v - device_velocity);

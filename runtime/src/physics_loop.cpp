@@ -16,6 +16,7 @@
 #include "collision.h"
 #include "ffd/measure.h"
 #include "ffd/trilinear.h"
+#include "ffd/worker_pool.h"
 
 namespace ffd {
 
@@ -57,7 +58,7 @@ std::uint32_t total_contacts(const StepReport& report) {
 Frame make_frame_prototype(const Model& model) {
   Frame frame;
   frame.nodes.resize(model.node_count());
-  frame.boxes.resize(model.box_count());
+  frame.boxes.resize(model.box_count());  // left as built when LoopOptions::frame_boxes is off
   frame.asleep.resize(model.objects.size());
   frame.contacts.resize(kContactCapacity);
   return frame;
@@ -72,6 +73,7 @@ struct PhysicsLoop::Impl {
         initial(initial_state),
         state(std::move(initial_state)),
         scratch(make_scratch(m)),
+        pool(std::max(1, options.threads), options.on_thread_start, options.on_thread_stop),
         pending(options.command_capacity),
         commands(options.command_capacity),
         telemetry(options.telemetry_capacity),
@@ -80,6 +82,7 @@ struct PhysicsLoop::Impl {
         snapshots_free(options.snapshot_pool),
         frames(make_frame_prototype(m)),
         governor(options.governor) {
+    attach_pool(model, scratch, pool);
     budget_ns = options.budget_ns;
     auto_accuracy = options.auto_accuracy;
     governor.start(state.params.accuracy);
@@ -105,6 +108,7 @@ struct PhysicsLoop::Impl {
   const State initial;
   State state;
   Scratch scratch;
+  WorkerPool pool;
   StepReport report;
   std::int64_t budget_ns;
   bool paused = false;
@@ -195,7 +199,8 @@ void PhysicsLoop::Impl::publish_frame() {
   std::copy(state.x.begin(), state.x.end(), f.nodes.begin());
   // Frames show the FFD AABBs whatever the accuracy level. Boxes a response left stale are
   // refreshed so the frame shows the step's final lattice.
-  if (box_level(model, state.params.accuracy).boxes == &model.boxes) {
+  if (!options.frame_boxes) {
+  } else if (box_level(model, state.params.accuracy).boxes == &model.boxes) {
     for (Index b = 0; b < model.box_count(); ++b)
       if (!scratch.box_valid[b]) update_box(model, model.boxes, state, scratch, b);
     std::copy(scratch.box_nodes.begin(), scratch.box_nodes.begin() + model.box_count(), f.boxes.begin());
@@ -296,7 +301,8 @@ void PhysicsLoop::Impl::run() {
   if (options.realtime_priority && options.pacing == Pacing::RealTime) {
     sched_param param{};
     param.sched_priority = sched_get_priority_max(SCHED_FIFO) - 9;
-    fifo.store(pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0);
+    fifo.store(pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0 &&
+               pool.set_realtime_priority(param.sched_priority));
   }
   if (options.on_thread_start) options.on_thread_start();
   std::int64_t release = monotonic_ns();
@@ -333,6 +339,8 @@ void PhysicsLoop::Impl::run() {
     release += options.period_ns;
     if (options.pacing == Pacing::RealTime) {
       const std::int64_t now = monotonic_ns();
+      // The workers sleep until the next release too (no system call wakes them).
+      pool.end_step(now > release ? 0 : release - options.spin_ns);
       if (now > release) {
         // Overrun: skip the ticks already gone and wait for the next one (see README, "The
         // physics loop"): no burst of back-to-back steps, the tick phase a device samples at
@@ -406,6 +414,7 @@ LoopCounters PhysicsLoop::counters() const {
   c.accuracy_switches = i.accuracy_switches.load();
   c.realtime_priority = i.fifo.load();
   c.memory_locked = i.locked.load();
+  c.threads = i.pool.threads();
   return c;
 }
 

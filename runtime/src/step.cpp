@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 
 #include "dynamics.h"
+#include "ffd/worker_pool.h"
 #include "collision.h"
 #include "interaction.h"
 #include "sleep.h"
@@ -42,28 +44,67 @@ bool all_finite(const State& state) {
 
 }  // namespace
 
+namespace {
+
+void make_workspace(const Model& model, Scratch::PairWorkspace& w) {
+  const std::size_t boxes = largest_box_set(model);
+  w.box_list_a.resize(boxes);
+  w.box_list_b.resize(boxes);
+  w.box_range.resize(boxes);
+  w.grid_begin.resize(kBroadPhaseGridCells + 1);
+  w.grid_cursor.resize(kBroadPhaseGridCells + 1);
+  w.grid_entries.resize(8 * boxes + 64);
+  for (std::vector<int>& c : w.cell_lattice) c.resize(boxes);
+  w.cell_far.resize(boxes);
+  w.pairs.resize(8 * boxes + 64);
+}
+
+}  // namespace
+
 Scratch make_scratch(const Model& model) {
   Scratch s;
   // Room for the largest box set of any accuracy level (level 4 has several boxes a cell).
   const std::size_t boxes = largest_box_set(model);
   s.box_nodes.resize(boxes);
   s.box_valid.assign(boxes, 0);
-  s.box_min.resize(boxes);
-  s.box_max.resize(boxes);
+  s.box_moved.assign(boxes, 0);
+  for (int axis = 0; axis < 3; ++axis) {
+    s.box_lo[axis].resize(boxes);
+    s.box_hi[axis].resize(boxes);
+  }
   if (sleeping(model)) s.box_wake_margin.assign(boxes, 0.0);
-  if (model.hash_table_size > 0) {
-    s.bucket_begin.assign(std::max(model.hash_table_size, model.sub_box_hash_table_size) + 1, 0);
-    // A box no larger than a hash cell touches at most 8 of them.
-    const std::size_t capacity = 8 * boxes + 64;
-    s.entries.resize(capacity);
-    s.entries_unsorted.resize(capacity);
-    s.entry_bucket.resize(capacity);
+  if (model.collides) {
+    s.object_lo.resize(model.objects.size());
+    s.object_hi.resize(model.objects.size());
+    s.object_order.resize(model.objects.size());
+    s.pair_tasks.resize(32 * model.objects.size() + 64);
+    s.pair_workspaces.resize(1);
+    make_workspace(model, s.pair_workspaces[0]);
+    s.pairs.resize(8 * boxes + 64);
+    s.pair_hit.resize(s.pairs.size());
+    s.pair_keys.resize(s.pairs.size());
+    s.pair_sorted_keys.resize(s.pairs.size());
   }
   s.x_prev.resize(model.node_count());
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());
   s.spring_inv_denominator.resize(model.springs.size());
   s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
+  s.object_work.resize(model.objects.size());
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& o = model.objects[i];
+    s.object_work[i] = o.dynamics == DynamicsKind::MassSpring
+                           ? static_cast<double>(o.spring_end - o.spring_begin) * o.mass_spring.iterations
+                           : o.region_begin == o.region_end
+                                 ? 0.0
+                                 : static_cast<double>(model.regions[o.region_end - 1].member_end -
+                                                       model.regions[o.region_begin].member_begin);
+  }
+  s.objects_by_work.resize(model.objects.size());
+  std::iota(s.objects_by_work.begin(), s.objects_by_work.end(), Index{0});
+  std::stable_sort(s.objects_by_work.begin(), s.objects_by_work.end(),
+                   [&](Index a, Index b) { return s.object_work[a] > s.object_work[b]; });
+  s.object_tasks.resize(model.objects.size());
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
   s.contacts.resize(kContactCapacity);
   std::size_t most_triangles = 0;
@@ -88,16 +129,37 @@ Scratch make_scratch(const Model& model) {
   return s;
 }
 
+void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
+  scratch.pool = &pool;
+  if (!model.collides) return;
+  const std::size_t threads = static_cast<std::size_t>(pool.threads());
+  while (scratch.pair_workspaces.size() < threads) {
+    scratch.pair_workspaces.emplace_back();
+    make_workspace(model, scratch.pair_workspaces.back());
+    // As much room as the first workspace has grown to.
+    scratch.pair_workspaces.back().grid_entries.resize(scratch.pair_workspaces[0].grid_entries.size());
+    scratch.pair_workspaces.back().pairs.resize(scratch.pair_workspaces[0].pairs.size());
+  }
+}
+
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) {
-  if (!last.hash_overflow || model.hash_table_size == 0) return;
-  // Boxes stretched over hundreds of hash cells mean a blown-up scene, not a large one:
-  // stop growing there and keep reporting the overflow.
-  const std::size_t limit = 512 * (8 * largest_box_set(model) + 64);
-  if (scratch.entries.size() >= limit) return;
-  const std::size_t capacity = std::min(limit, 2 * scratch.entries.size());
-  scratch.entries.resize(capacity);
-  scratch.entries_unsorted.resize(capacity);
-  scratch.entry_bucket.resize(capacity);
+  if (!last.hash_overflow || !model.collides) return;
+  // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,
+  // not a large one: stop growing there and keep reporting the overflow.
+  const std::size_t boxes = largest_box_set(model);
+  const std::size_t entry_limit = 512 * (8 * boxes + 64), pair_limit = 256 * (4 * boxes + 64);
+  auto grow = [](auto& v, std::size_t limit) {
+    if (v.size() < limit) v.resize(std::min(limit, 2 * v.size()));
+  };
+  for (Scratch::PairWorkspace& w : scratch.pair_workspaces) {
+    grow(w.grid_entries, entry_limit);
+    grow(w.pairs, pair_limit);
+  }
+  grow(scratch.pair_tasks, 256 * (32 * model.objects.size() + 64));
+  grow(scratch.pairs, pair_limit);
+  scratch.pair_hit.resize(scratch.pairs.size());
+  scratch.pair_keys.resize(scratch.pairs.size());
+  scratch.pair_sorted_keys.resize(scratch.pairs.size());
 }
 
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch) {
@@ -113,6 +175,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   const BoxLevel level = box_level(model, state.params.accuracy);
   scratch.contact_count = 0;
   scratch.contacts_dropped = 0;
+  if (scratch.pool) scratch.pool->begin_step();
   for (Stage stage : model.pipeline) {
     const std::int64_t t0 = now_ns();
     StageCounters& counters = report.counters[static_cast<std::size_t>(stage)];
@@ -127,8 +190,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         // The exact level pairs cells whose boxes come within its contact radius.
         const double margin = level.exact ? model.surface_contact_radius : 0.0;
         if (sleeping(model)) set_wake_margins(model, *level.boxes, state, scratch);
-        report.hash_overflow =
-            !build_spatial_hash(model, level.boxes->size(), margin, level.hash_table_size, scratch, counters);
+        grow_box_bounds(model, *level.boxes, margin, scratch);
+        report.hash_overflow = !find_candidate_pairs(model, level, state, scratch, counters);
         break;
       }
       case Stage::NarrowPhase: {
@@ -154,6 +217,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
     }
     report.stage_ns[static_cast<std::size_t>(stage)] = now_ns() - t0;
   }
+  if (scratch.pool) scratch.pool->end_step(0);
   report.finite = all_finite(state) && is_finite(state.probe.x) && is_finite(state.probe.v);
   report.contacts_recorded = scratch.contact_count;
   report.contacts_dropped = scratch.contacts_dropped;

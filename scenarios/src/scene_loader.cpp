@@ -114,8 +114,11 @@ class SceneReader {
     settings.beta = sim.number("beta", settings.beta, kUnitInterval);
     settings.seed = static_cast<std::uint64_t>(sim.integer("seed", static_cast<std::int64_t>(settings.seed),
                                                            0, std::numeric_limits<std::int64_t>::max()));
-    settings.hash_table_size =
-        static_cast<int>(sim.integer("hash_table_size", settings.hash_table_size, 1, 10'000'000));
+    // The paper's single hash table of T buckets is gone: the broad phase sizes its grids to
+    // the objects (README, "How a step works"), so a table size would change nothing.
+    if (sim.has("hash_table_size"))
+      sim.fail_at("hash_table_size", "hash_table_size is no longer used: the broad phase sizes its grids to the objects "
+                                     "(remove the key; hash_cell_size still sets the grid cell edge)");
     settings.hash_cell_size = sim.number("hash_cell_size", settings.hash_cell_size, kNonNegative);
     settings.min_box_thickness = sim.number("min_box_thickness", settings.min_box_thickness, kUnitInterval);
     settings.accuracy = static_cast<Accuracy>(

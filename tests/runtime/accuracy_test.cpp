@@ -235,8 +235,8 @@ double exact_narrow_phase(ScaledSlab& s) {
   Scratch scratch = make_scratch(s.model);
   update_boxes(s.model, s.model.boxes, s.state, scratch);
   StageCounters counters;
-  REQUIRE(build_spatial_hash(s.model, s.model.boxes.size(), s.model.surface_contact_radius, s.model.hash_table_size,
-                             scratch, counters));
+  grow_box_bounds(s.model, s.model.boxes, s.model.surface_contact_radius, scratch);
+  REQUIRE(find_candidate_pairs(s.model, box_level(s.model, Accuracy::Exact), s.state, scratch, counters));
   const State before = s.state;
   double depth = 0.0;
   collide_surfaces<false>(s.model, s.state, scratch, counters, depth);

@@ -1,110 +1,179 @@
-// Section 6.1: the spatial hash finds every pair of overlapping boxes that brute force
-// finds, exactly once, also for negative and far-away coordinates.
+// Section 6.1: the broad phase finds every pair of boxes whose AABBs overlap and that the
+// narrow phase wants, exactly once, as brute force does: between objects, within one object
+// (cells two or more lattice steps apart) and, for the race against FCL, between
+// neighbouring cells too; also far from the origin and after a buffer ran out.
 #include <catch2/catch.hpp>
 #include <algorithm>
+#include <functional>
 #include <random>
 
 #include "collision.h"
+#include "ffd/broad_phase.h"
 #include "ffd/step.h"
+#include "support/test_scenes.h"
 
 using namespace ffd;
 
 namespace {
 
-struct RandomBoxes {
-  Model model;
-  Scratch scratch;
-};
+// Uniform in [lo, hi) from std::mt19937's raw output (fixed by the standard).
+double uniform(std::mt19937& rng, double lo, double hi) { return lo + (hi - lo) * (rng() / 4294967296.0); }
 
-RandomBoxes random_boxes(std::size_t count, const Vec3& centre, double spread, double cell, Index table, unsigned seed) {
-  RandomBoxes r;
-  r.model.boxes.box_cell.assign(count, 0);
-  r.model.hash_table_size = table;
-  r.model.hash_cell_size = cell;
-  r.scratch = make_scratch(r.model);
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> pos(-spread, spread), size(0.1 * cell, 1.5 * cell), jitter(-0.2, 0.2);
-  for (std::size_t b = 0; b < count; ++b) {
-    const Vec3 lo = centre + Vec3(pos(rng), pos(rng), pos(rng));
-    const Vec3 ext(size(rng), size(rng), size(rng));
-    for (int k = 0; k < 8; ++k)
-      r.scratch.box_nodes[b][k] = lo + Vec3((k & 1) * ext.x(), ((k >> 1) & 1) * ext.y(), ((k >> 2) & 1) * ext.z()) +
-                                  cell * Vec3(jitter(rng), jitter(rng), jitter(rng));
-    r.scratch.box_nodes[b][8] = lo + 0.5 * ext;
-  }
-  return r;
-}
-
-std::vector<std::pair<Index, Index>> brute_force_pairs(const Scratch& s, std::size_t count) {
+std::vector<std::pair<Index, Index>> brute_force(const Scratch& s, std::size_t count,
+                                                 const std::function<bool(Index, Index)>& wanted) {
   std::vector<std::pair<Index, Index>> pairs;
-  auto bounds = [&](Index b) {
-    Vec3 lo = s.box_nodes[b][0], hi = lo;
-    for (const Vec3& p : s.box_nodes[b]) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    return std::make_pair(lo, hi);
-  };
   for (Index a = 0; a < count; ++a)
     for (Index b = a + 1; b < count; ++b) {
-      const auto [alo, ahi] = bounds(a);
-      const auto [blo, bhi] = bounds(b);
-      if ((alo.array() <= bhi.array()).all() && (blo.array() <= ahi.array()).all()) pairs.emplace_back(a, b);
+      bool overlap = true;
+      for (int axis = 0; axis < 3; ++axis)
+        overlap = overlap && s.box_lo[axis][a] <= s.box_hi[axis][b] && s.box_lo[axis][b] <= s.box_hi[axis][a];
+      if (overlap && wanted(a, b)) pairs.emplace_back(a, b);
     }
   return pairs;
 }
 
-void check_against_brute_force(const Vec3& centre, double cell, Index table, unsigned seed) {
-  RandomBoxes r = random_boxes(400, centre, 6 * cell, cell, table, seed);
+// The pairs found, sorted (the broad phase hands them over in the order the narrow phase
+// answers them).
+std::vector<std::pair<Index, Index>> found(const Scratch& s) {
+  std::vector<std::pair<Index, Index>> pairs;
+  for (Index p = 0; p < s.pair_count; ++p) pairs.emplace_back(s.pairs[p].a, s.pairs[p].b);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+// A scene of `count` small spheres (one object each, a few cells), placed at random in a
+// cube of `spread` around `centre`, their boxes from the lattice as a step makes them.
+struct Scene {
+  Model model;
+  State state;
+  Scratch scratch;
+};
+
+Scene spheres(int count, const Vec3& centre, double spread, unsigned seed) {
+  SceneSpec spec;
+  spec.settings.effects = static_cast<EffectSet>(Effect::InterCollision);
+  std::mt19937 rng(seed);
+  for (int i = 0; i < count; ++i) {
+    ObjectSpec o = test::sphere_object("s" + std::to_string(i), uniform(rng, 0.01, 0.03), 0.012,
+                                       centre + Vec3(uniform(rng, -spread, spread), uniform(rng, -spread, spread),
+                                                     uniform(rng, -spread, spread)));
+    spec.objects.push_back(o);
+  }
+  Scene s{test::compile_quietly(spec), {}, {}};
+  s.state = initial_state(s.model);
+  s.scratch = make_scratch(s.model);
+  return s;
+}
+
+void check_inter(const Vec3& centre, unsigned seed) {
+  Scene s = spheres(60, centre, 0.08, seed);
+  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
   StageCounters counters;
-  StepReport last;
-  last.hash_overflow = true;
-  // Boxes of up to 1.5 hash cells touch up to 27 cells: the first try overflows and the
-  // buffer grows between "steps", as in a run.
-  for (int i = 0; i < 10 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
-  REQUIRE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
-  CHECK(counters.hash_entries >= 400);
-  std::vector<std::pair<Index, Index>> hashed = broad_phase_pairs(r.model, r.scratch);
-  std::vector<std::pair<Index, Index>> expected = brute_force_pairs(r.scratch, 400);
-  std::sort(hashed.begin(), hashed.end());
-  CHECK(std::adjacent_find(hashed.begin(), hashed.end()) == hashed.end());  // each pair once
-  CHECK(expected.size() > 50);  // the test means something: many overlaps
-  CHECK(hashed == expected);
+  PairQuery query;
+  query.inter = true;
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  const auto expected = brute_force(s.scratch, s.model.box_count(), [&](Index a, Index b) {
+    return s.model.cell_object[s.model.boxes.box_cell[a]] != s.model.cell_object[s.model.boxes.box_cell[b]];
+  });
+  CHECK(expected.size() > 20);  // the test means something: many overlaps
+  CHECK(found(s.scratch) == expected);  // each once, sorted
 }
 
 }  // namespace
 
-TEST_CASE("spatial hash pairs equal brute-force pairs near the origin", "[broad_phase]") {
-  check_against_brute_force(Vec3::Zero(), 0.02, 4000, 1);
+TEST_CASE("broad phase: pairs between objects equal brute force near the origin", "[broad_phase]") {
+  check_inter(Vec3::Zero(), 1);
 }
 
-TEST_CASE("spatial hash pairs equal brute-force pairs at negative coordinates", "[broad_phase]") {
-  check_against_brute_force(Vec3(-3.7, -12.2, -0.9), 0.02, 4000, 2);
+TEST_CASE("broad phase: pairs between objects equal brute force at negative coordinates", "[broad_phase]") {
+  check_inter(Vec3(-3.7, -12.2, -0.9), 2);
 }
 
-TEST_CASE("spatial hash pairs equal brute-force pairs far away", "[broad_phase]") {
-  check_against_brute_force(Vec3(4.0e5, -7.5e5, 1.0e6), 1.0, 4000, 3);
+TEST_CASE("broad phase: pairs between objects equal brute force far away", "[broad_phase]") {
+  check_inter(Vec3(4.0e3, -7.5e3, 1.0e4), 3);
 }
 
-TEST_CASE("spatial hash pairs equal brute-force pairs with a tiny table (many collisions)", "[broad_phase]") {
-  check_against_brute_force(Vec3(0.5, -0.5, 0.25), 0.02, 7, 4);
-}
-
-TEST_CASE("hash grid coordinates saturate instead of overflowing", "[broad_phase]") {
-  CHECK(hash_grid_coordinate(-0.5, 1.0) == -1);
-  CHECK(hash_grid_coordinate(0.5, 1.0) == 0);
-  CHECK(hash_grid_coordinate(1e300, 1.0) == 4503599627370496LL);
-  CHECK(hash_grid_coordinate(-1e300, 1.0) == -4503599627370496LL);
-  CHECK(spatial_hash(-1, -1, -1, 4000) < 4000);
-}
-
-TEST_CASE("the entry buffer overflows into a flag, and grows between steps", "[broad_phase]") {
-  RandomBoxes r = random_boxes(50, Vec3::Zero(), 0.1, 0.02, 4000, 9);
-  for (auto& nodes : r.scratch.box_nodes) nodes[8] = nodes[0] + Vec3(0.2, 0.2, 0.2);  // 10 hash cells a side
+TEST_CASE("broad phase: self pairs and neighbour pairs of a folded lattice equal brute force", "[broad_phase]") {
+  SceneSpec spec;
+  spec.settings.effects = static_cast<EffectSet>(Effect::SelfCollision);
+  spec.objects.push_back(test::box_object("slab", Vec3(0.3, 0.02, 0.1), 0.02, Vec3::Zero()));
+  Scene s{test::compile_quietly(spec), {}, {}};
+  s.state = initial_state(s.model);
+  s.scratch = make_scratch(s.model);
+  // Fold the slab in two about x = 0 (the right half over the left, 1 cm above it) and
+  // jitter every node, so that cells far apart in the lattice overlap.
+  std::mt19937 rng(7);
+  for (Vec3& x : s.state.x) {
+    if (x.x() > 0.0) x = Vec3(-x.x(), 0.03 - x.y(), x.z());
+    x += Vec3::Constant(0.002).cwiseProduct(Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)));
+  }
+  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  auto lattice_distance = [&](Index a, Index b) {
+    return (s.model.boxes.box_lattice[a] - s.model.boxes.box_lattice[b]).cwiseAbs().maxCoeff();
+  };
   StageCounters counters;
-  CHECK_FALSE(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
+  PairQuery query;
+  query.self = true;
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  const auto self = brute_force(s.scratch, s.model.box_count(), [&](Index a, Index b) { return lattice_distance(a, b) >= 2; });
+  CHECK(self.size() > 20);
+  CHECK(found(s.scratch) == self);
+  query.neighbours = true;
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  const auto all = brute_force(s.scratch, s.model.box_count(), [](Index, Index) { return true; });
+  CHECK(all.size() > self.size());
+  CHECK(found(s.scratch) == all);
+}
+
+TEST_CASE("broad phase: an undeformed lattice gives no self pair, and no grid cell is paired", "[broad_phase]") {
+  SceneSpec spec;
+  spec.settings.effects = static_cast<EffectSet>(Effect::SelfCollision);
+  spec.objects.push_back(test::box_object("slab", Vec3(0.3, 0.1, 0.2), 0.02, Vec3::Zero()));
+  Scene s{test::compile_quietly(spec), {}, {}};
+  s.state = initial_state(s.model);
+  s.scratch = make_scratch(s.model);
+  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  StageCounters counters;
+  PairQuery query;
+  query.self = true;
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  CHECK(s.scratch.pair_count == 0);
+  CHECK(counters.hash_entries > s.model.box_count());
+}
+
+TEST_CASE("broad phase: a pair buffer too small is reported, and grows between steps", "[broad_phase]") {
+  Scene s = spheres(60, Vec3::Zero(), 0.05, 9);
+  s.scratch.pair_workspaces[0].pairs.resize(3);
+  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  StageCounters counters;
+  PairQuery query;
+  query.inter = true;
+  CHECK_FALSE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
   StepReport last;
   last.hash_overflow = true;
-  for (int i = 0; i < 30 && !build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters); ++i) grow_scratch(r.model, r.scratch, last);
-  CHECK(build_spatial_hash(r.model, r.model.box_count(), 0.0, r.model.hash_table_size, r.scratch, counters));
+  for (int i = 0; i < 30 && !find_pairs(s.model, s.model.boxes, query, s.scratch, counters); ++i)
+    grow_scratch(s.model, s.scratch, last);
+  CHECK(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  CHECK(s.scratch.pair_count > 3);
+}
+
+TEST_CASE("broad phase: BroadPhase on recorded boxes finds what the step finds", "[broad_phase]") {
+  Scene s = spheres(40, Vec3(1.0, 2.0, 3.0), 0.06, 4);
+  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  BroadPhase ours(s.model);
+  ours.set_boxes(std::vector<std::array<Vec3, 9>>(s.scratch.box_nodes.begin(), s.scratch.box_nodes.begin() + s.model.box_count()));
+  std::vector<std::pair<Index, Index>> wanted, all;
+  REQUIRE(ours.find_wanted_pairs(wanted));
+  REQUIRE(ours.find_all_pairs(all));
+  std::sort(wanted.begin(), wanted.end());
+  std::sort(all.begin(), all.end());
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  const auto expected_all = brute_force(s.scratch, s.model.box_count(), [](Index, Index) { return true; });
+  CHECK(all == expected_all);
+  CHECK(wanted.size() < all.size());  // neighbouring cells of one sphere overlap
+  for (const auto& p : wanted) CHECK(std::binary_search(all.begin(), all.end(), p));
 }

@@ -135,11 +135,15 @@ TEST_CASE("Physics loop: fast and real-time runs equal direct stepping bit for b
   const std::vector<Command> commands = busy_commands(model);
   const std::uint64_t steps = 500;
   const std::vector<std::uint64_t> expected = hashes_by_direct_stepping(model, commands, steps);
+  for (const int threads : {1, 2})
   for (const Pacing pacing : {Pacing::Fast, Pacing::RealTime}) {
-    const LoopRun run = run_loop(model, commands, options_for(pacing, steps));
+    LoopOptions options = options_for(pacing, steps);
+    options.threads = threads;
+    const LoopRun run = run_loop(model, commands, options);
     REQUIRE(run.telemetry.size() == steps);
+    CHECK(run.counters.threads == threads);
     for (std::size_t i = 0; i < steps; ++i) {
-      INFO("pacing " << (pacing == Pacing::Fast ? "fast" : "real time") << ", step " << i + 1);
+      INFO("pacing " << (pacing == Pacing::Fast ? "fast" : "real time") << ", " << threads << " threads, step " << i + 1);
       REQUIRE(run.telemetry[i].step == i + 1);
       REQUIRE(run.telemetry[i].has_hash);
       REQUIRE(run.telemetry[i].state_hash == expected[i]);
@@ -170,10 +174,11 @@ TEST_CASE("Physics loop: the probe pushes back and the force output says so") {
   CHECK(contacts > 0);
 }
 
-TEST_CASE("Physics loop: nothing is allocated on the physics thread") {
+TEST_CASE("Physics loop: nothing is allocated on the physics thread or its workers") {
   const Model model = test::compile_quietly(loop_scene());
   for (const Pacing pacing : {Pacing::Fast, Pacing::RealTime}) {
     LoopOptions options = options_for(pacing, 450);
+    options.threads = 2;  // on_thread_start runs on the worker too: its allocations count
     options.energy_every = 1;
     options.snapshot_every = 7;
     options.on_thread_start = [] { test::count_allocations_on_this_thread(true); };

@@ -115,16 +115,16 @@ TEST_CASE("without self_collision no self-collision work is done", "[scene][effe
   CHECK(without.narrow_totals.inter_pairs_tested > 0);
 }
 
-TEST_CASE("a scene without collisions builds no hash table and runs no collision stage", "[scene][effects]") {
+TEST_CASE("a scene without collisions builds no broad-phase grid and runs no collision stage", "[scene][effects]") {
   SceneSpec spec;
   spec.settings.effects = static_cast<EffectSet>(Effect::Gravity);
   spec.objects.push_back(test::sphere_object("ball", 0.05, 0.02, Vec3(0, 1, 0)));
   const Model model = test::compile_quietly(spec);
-  CHECK(model.hash_table_size == 0);
+  CHECK_FALSE(model.collides);
   CHECK(model.pipeline == std::vector<Stage>{Stage::Gravity, Stage::Dynamics});
   Scratch scratch = make_scratch(model);
-  CHECK(scratch.bucket_begin.empty());
-  CHECK(scratch.entries.empty());
+  CHECK(scratch.pair_workspaces.empty());
+  CHECK(scratch.pairs.empty());
   State state = initial_state(model);
   StepReport report;
   step(model, state, scratch, report);

@@ -165,7 +165,6 @@ TEST_CASE("missing optional keys take their documented defaults", "[scene_loader
   CHECK(scene.settings.alpha == 0.5);
   CHECK(scene.settings.beta == 0.3);
   CHECK(scene.settings.seed == 1);
-  CHECK(scene.settings.hash_table_size == 4000);
   CHECK(scene.settings.hash_cell_size == 0.0);
   CHECK(scene.settings.min_box_thickness == 0.1);
   CHECK(scene.planes.empty());
@@ -379,8 +378,9 @@ TEST_CASE("scene value errors", "[scene_loader]") {
                   "inline.toml:2:8: simulation.seed: must be >= 0 (got -1)");
   }
   SECTION("hash table size") {
-    require_error("[simulation]\nhash_table_size = 0\neffects = []\n",
-                  "inline.toml:2:19: simulation.hash_table_size: must be in [1, 10000000] (got 0)");
+    require_error("[simulation]\nhash_table_size = 4000\neffects = []\n",
+                  "inline.toml:2:19: simulation.hash_table_size: hash_table_size is no longer used: the broad phase sizes "
+                  "its grids to the objects (remove the key; hash_cell_size still sets the grid cell edge)");
   }
   SECTION("effects is not an array") {
     require_error("[simulation]\neffects = \"gravity\"\n",

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <random>
 
 #include "ffd/scene_loader.h"
@@ -42,6 +43,7 @@ BoxSet random_boxes(std::size_t count, std::uint32_t seed) {
   set.moment = "synthetic";
   set.hash_cell_size = 0.1;  // m
   set.hash_table_size = 4093;
+  set.model = ffdbench::unconnected_boxes(count);
   for (std::size_t i = 0; i < count; ++i) {
     const Vec3 centre(uniform(rng, 0.0, 0.5), uniform(rng, 0.0, 0.5), uniform(rng, 0.0, 0.5));
     const Vec3 half(uniform(rng, 0.01, 0.05), uniform(rng, 0.01, 0.05), uniform(rng, 0.01, 0.05));
@@ -109,6 +111,7 @@ TEST_CASE("boxes touching at a face are a pair for us and FCL's tree", "[race]")
   set.boxes.push_back(box_nodes(Vec3(1.9, 0.0, 0.0), Vec3(2.2, 0.5, 0.5)));  // D
   set.boxes.push_back(box_nodes(Vec3(2.2, 0.0, 0.0), Vec3(2.4, 0.5, 0.5)));  // E
   set.boxes.push_back(box_nodes(Vec3(2.400001, 0.0, 0.0), Vec3(2.6, 0.5, 0.5)));  // F
+  set.model = ffdbench::unconnected_boxes(set.boxes.size());
   const RaceResult r = ffdbench::race(set, 3);
   INFO(ffdbench::markdown_table({r}));
   CHECK(r.our_pairs == 2);
@@ -122,8 +125,9 @@ TEST_CASE("boxes touching at a face are a pair for us and FCL's tree", "[race]")
 }
 
 TEST_CASE("two teapots mid-pile: FCL's pairs are all among ours", "[race]") {
-  const ffd::Model model =
-      ffd::test::compile_quietly(ffd::load_scene_file(std::string(FFDSIM_SCENARIO_DIR) + "/scenes/two_teapots.toml"));
+  const auto shared = std::make_shared<const ffd::Model>(
+      ffd::test::compile_quietly(ffd::load_scene_file(std::string(FFDSIM_SCENARIO_DIR) + "/scenes/two_teapots.toml")));
+  const ffd::Model& model = *shared;
   ffd::State state = ffd::initial_state(model);
   ffd::Scratch scratch = ffd::make_scratch(model);
   ffd::StepReport report;
@@ -134,7 +138,7 @@ TEST_CASE("two teapots mid-pile: FCL's pairs are all among ours", "[race]") {
   }
   REQUIRE(report.finite);
   ffd::update_all_boxes(model, state, scratch);
-  const BoxSet set = ffdbench::record_boxes(model, scratch, "two_teapots", "mid-pile", state.step);
+  const BoxSet set = ffdbench::record_boxes(shared, scratch, "two_teapots", "mid-pile", state.step);
   REQUIRE(set.boxes.size() == model.box_count());
 
   const RaceResult r = ffdbench::race(set, 3);
@@ -149,6 +153,8 @@ TEST_CASE("two teapots mid-pile: FCL's pairs are all among ours", "[race]") {
   // The hash can only lose pairs that touch exactly on a cell boundary.
   CHECK(r.fcl_hash_pairs + r.extra_vs_hash == r.our_pairs);
   CHECK(r.extra_vs_hash <= r.our_pairs / 100);
+  // The step asks for fewer: no neighbouring cells of one teapot.
+  CHECK(r.wanted_pairs < r.our_pairs / 2);
 }
 
 TEST_CASE("an empty set and a single box give no pairs", "[race]") {
@@ -156,6 +162,7 @@ TEST_CASE("an empty set and a single box give no pairs", "[race]") {
   set.scenario = "tiny";
   set.hash_cell_size = 0.1;
   set.hash_table_size = 17;
+  set.model = ffdbench::unconnected_boxes(0);
   const RaceResult empty = ffdbench::race(set, 2);
   CHECK(empty.boxes == 0);
   CHECK(empty.our_pairs == 0);
@@ -164,6 +171,7 @@ TEST_CASE("an empty set and a single box give no pairs", "[race]") {
   CHECK(empty.missing_any == 0);
 
   set.boxes.push_back(box_nodes(Vec3(0.1, 0.2, 0.3), Vec3(0.15, 0.25, 0.35)));
+  set.model = ffdbench::unconnected_boxes(1);
   const RaceResult one = ffdbench::race(set, 2);
   CHECK(one.boxes == 1);
   CHECK(one.our_pairs == 0);
@@ -196,7 +204,7 @@ TEST_CASE("race results format as a Markdown table and as JSON", "[race]") {
   INFO(table);
   CHECK(table.find("| scenario | moment | step | boxes |") == 0);
   CHECK(table.find("| bunnies_soft | settled | 3000 | 1200 | 5000 / 5000 / 4990 | 100.0 | 250.0 (2.50×) | "
-                   "1234.5 (12.3×) | all 5000 FCL pairs found |") != std::string::npos);
+                   "1234.5 (12.3×) | 0, 0.0 | all 5000 FCL pairs found |") != std::string::npos);
   CHECK(table.find("3 missing (tree 3, hash 0)") != std::string::npos);
   CHECK(table.find("(n/a)") != std::string::npos);
 

@@ -543,6 +543,7 @@ void Viewer::latency_panel(int width) {
   ImGui::Text("overruns %llu   late commands %llu   SCHED_FIFO %s", static_cast<unsigned long long>(counters.overruns),
               static_cast<unsigned long long>(counters.commands_late), counters.realtime_priority ? "yes" : "no");
   ImGui::Text("contacts %u   fastest node %.2f m/s%s", h.contacts, h.max_speed_m_s, h.finite ? "" : "   NON-FINITE");
+  ImGui::Text("physics threads %d   SIMD %s", counters.threads, simd_target_name());
   if (ImGui::BeginTable("stages", 3, ImGuiTableFlags_SizingStretchProp)) {
     for (Stage stage : model.pipeline) {
       const double us = h.stage_us[static_cast<std::size_t>(stage)];

@@ -1,5 +1,7 @@
 #include "bench/accuracy_table.h"
 
+#include "ffd/worker_pool.h"
+
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -41,7 +43,7 @@ double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::
 }
 
 AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
-                         std::uint64_t sample_every, const Progress& progress) {
+                         std::uint64_t sample_every, const Progress& progress, int threads) {
   AccuracyRun run;
   run.scene = scene;
   run.level = level;
@@ -54,6 +56,8 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
   command.value = static_cast<double>(level);
   ffd::apply_command(model, initial, state, command);
   ffd::Scratch scratch = ffd::make_scratch(model);
+  ffd::WorkerPool pool(threads);
+  ffd::attach_pool(model, scratch, pool);
   ffd::StepReport report;
   std::vector<double> collision_ms, step_ms, gaps, penetrations, penetrating;
   collision_ms.reserve(steps);

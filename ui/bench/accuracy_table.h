@@ -40,10 +40,10 @@ struct AccuracyRun {
 // it does rest on, so that neighbour does not count.
 double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::SurfaceContactReport& contacts);
 
-// Runs `model` for `steps` steps at `level`; samples the surfaces every `sample_every`
-// steps over the second half.
+// Runs `model` for `steps` steps at `level` on `threads` threads; samples the surfaces every
+// `sample_every` steps over the second half.
 AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
-                         std::uint64_t sample_every, const Progress& progress);
+                         std::uint64_t sample_every, const Progress& progress, int threads = 1);
 
 // Markdown: one table per scene, and a line per scene on what level 2 costs against level 5.
 std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::string& cpu, std::uint64_t steps);

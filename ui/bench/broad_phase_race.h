@@ -1,10 +1,11 @@
 #pragma once
-// The broad-phase race: the same recorded FFD AABBs through our spatial hash
-// (ffd::SpatialHashBroadPhase, the code step() runs) and through FCL 0.7's
+// The broad-phase race: the same recorded FFD AABBs through our broad phase
+// (ffd::BroadPhase, the code step() runs) and through FCL 0.7's
 // DynamicAABBTreeCollisionManager and SpatialHashingCollisionManager, timed in one process,
 // with a coverage check: every pair FCL reports as overlapping must be one of our pairs.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
@@ -20,16 +21,21 @@ struct BoxSet {
   std::string scenario;            // e.g. "bunnies_soft"
   std::string moment;              // "early", "mid-pile", "settled"
   std::uint64_t step = 0;
-  double hash_cell_size = 0.0;     // m, as the scene's Model uses (> 0)
-  ffd::Index hash_table_size = 0;  // buckets, as the scene's Model uses (> 0)
+  // The compiled scene the boxes belong to (our broad phase knows its lattices, as in a step).
+  std::shared_ptr<const ffd::Model> model;
+  double hash_cell_size = 0.0;     // m: FCL's spatial hash cell, the scene's largest lattice cell (> 0)
+  ffd::Index hash_table_size = 0;  // FCL's spatial hash buckets: 2 per box, at least 4000 (the paper's)
   std::vector<std::array<ffd::Vec3, 9>> boxes;  // 9 world nodes per box (8 corners, centre)
 };
 
 // The boxes of a stepped scene as its broad phase sees them: Scratch::box_nodes (run
-// ffd::update_all_boxes first for the boxes of the current State rather than those the last
-// step hashed), with the Model's hash parameters.
-BoxSet record_boxes(const ffd::Model& model, const ffd::Scratch& scratch, std::string scenario, std::string moment,
-                    std::uint64_t step);
+// ffd::update_all_boxes first for the boxes of the current State).
+BoxSet record_boxes(std::shared_ptr<const ffd::Model> model, const ffd::Scratch& scratch, std::string scenario,
+                    std::string moment, std::uint64_t step);
+
+// A scene of `count` unconnected boxes (an object of one cell each), for boxes that come from
+// no lattice (synthetic sets): every pair is a pair of objects.
+std::shared_ptr<const ffd::Model> unconnected_boxes(std::size_t count);
 
 struct RaceResult {
   std::string scenario, moment;
@@ -42,9 +48,13 @@ struct RaceResult {
   std::size_t our_pairs = 0;
   std::size_t fcl_tree_pairs = 0, fcl_hash_pairs = 0;
   std::size_t fcl_hash_candidates = 0;
+  // The pairs a step wants (boxes of different objects, or of one object's cells that share
+  // no lattice node), and the time ours takes to find just those.
+  std::size_t wanted_pairs = 0;
+  double wanted_us = 0.0;
 
   // Median µs per run over the repetitions, after one untimed warm-up.
-  //   ours:   find_pairs (AABBs from the 9 nodes, hashing, pairs), buffers reused.
+  //   ours:   find_all_pairs (AABBs from the 9 nodes, object bounds, grids, pairs), buffers reused.
   //   build:  registerObjects + setup + collide on an emptied manager (clear() untimed).
   //   update: objects registered, AABBs rewritten (untimed) -> update() + collide.
   // FCL's figures exclude computing the AABBs, which ours includes. The main figure of
@@ -65,7 +75,7 @@ struct RaceResult {
 };
 
 // Races one set; repetitions >= 1 timed runs per method. Throws std::invalid_argument for
-// a non-positive cell size or table size.
+// a set without its model, or a non-positive cell size or table size.
 RaceResult race(const BoxSet& set, int repetitions);
 
 // A Markdown table, one row per result, with a note on how the figures were taken.

@@ -5,12 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
+#include "ffd/worker_pool.h"
 
 namespace ffdbench {
 
@@ -18,11 +20,11 @@ const std::vector<Scenario>& paper_scenarios() {
   // Step counts: long enough for the paper's events (landing, piling, settling) to happen
   // inside the measured window; --quick cuts them for a smoke run.
   static const std::vector<Scenario> scenarios = {
-      {"teapots", "scenes/two_teapots.toml", {"teapots", 12'640, 1'204, 1.7}, 0.15, 500, 2500, 200, 400},
-      {"alphabets", "scenes/alphabets.toml", {"alphabets", 2'265'744, 11'661, 279}, 1.0, 500, 1500, 150, 150},
-      {"happy_buddha", "scenes/happy_buddha.toml", {"happy Buddha", 293'000, 988, 0.3}, 0.10, 500, 1500, 200, 400},
-      {"bunnies_soft", "scenes/five_bunnies_soft.toml", {"bunnies", 347'250, 6'900, 0.5}, 0.35, 500, 1500, 200, 300},
-      {"bunnies_hard", "scenes/five_bunnies_hard.toml", {"bunnies", 347'250, 6'900, 0.5}, 0.35, 500, 1500, 200, 300},
+      {"teapots", "scenes/two_teapots.toml", {"teapots", 12'640, 1'204, 1.7}, 0.15, 0.40, 500, 2500, 200, 400},
+      {"alphabets", "scenes/alphabets.toml", {"alphabets", 2'265'744, 11'661, 279}, 4.0, 8.0, 500, 1500, 150, 150},
+      {"happy_buddha", "scenes/happy_buddha.toml", {"happy Buddha", 293'000, 988, 0.3}, 0.10, 0.25, 500, 1500, 200, 400},
+      {"bunnies_soft", "scenes/five_bunnies_soft.toml", {"bunnies", 347'250, 6'900, 0.5}, 0.5, 1.2, 500, 1500, 200, 300},
+      {"bunnies_hard", "scenes/five_bunnies_hard.toml", {"bunnies", 347'250, 6'900, 0.5}, 0.35, 1.0, 500, 1500, 200, 300},
   };
   return scenarios;
 }
@@ -66,37 +68,23 @@ std::string fixed(double value, int decimals) {
   return buffer;
 }
 
-ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick,
-                              const Progress& progress) {
-  ScenarioResult result;
-  result.scenario = scenario;
-  result.warmup_steps = quick ? scenario.quick_warmup_steps : scenario.warmup_steps;
-  result.measured_steps = quick ? scenario.quick_measured_steps : scenario.measured_steps;
+namespace {
+
+// One run of `model`: warm-up, measured window; box sets recorded when `record` is set.
+ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, ScenarioResult& result, int threads,
+                       bool record, const Progress& progress, const std::string& label) {
+  const ffd::Model& model = *shared_model;
   const std::uint64_t total = result.warmup_steps + result.measured_steps;
-
-  progress(scenario.key + ": loading", 0, total);
-  const auto load_start = std::chrono::steady_clock::now();
-  const ffd::SceneSpec spec = ffd::load_scene_file(scenarios_dir + "/" + scenario.scene_file);
-  std::vector<std::string> log;
-  const ffd::Model model = ffd::compile(spec, log);
-  result.load_s = seconds_since(load_start);
-  result.objects = model.objects.size();
-  for (const ffd::ObjectModel& o : model.objects) result.triangles += o.surface.triangles.size();
-  result.cells = model.cell_count();
-  result.boxes = model.box_count();
-  result.nodes = model.node_count();
-
   ffd::State state = ffd::initial_state(model);
   ffd::Scratch scratch = ffd::make_scratch(model);
+  ffd::WorkerPool pool(threads);
+  ffd::attach_pool(model, scratch, pool);
   ffd::Scratch record_scratch = ffd::make_scratch(model);  // boxes of the State, for the race
   ffd::StepReport report;
   const std::uint64_t record_at[3] = {total * 15 / 100, total * 55 / 100, total};
   const char* moment_names[3] = {"early", "mid-pile", "settled"};
-  std::vector<double> collision_ms, step_ms, dynamics_ms, contacts;
-  collision_ms.reserve(result.measured_steps);
-  step_ms.reserve(result.measured_steps);
-  dynamics_ms.reserve(result.measured_steps);
-  contacts.reserve(result.measured_steps);
+  std::vector<double> collision_ms, step_ms, dynamics_ms, box_ms, contacts;
+  for (std::vector<double>* v : {&collision_ms, &step_ms, &dynamics_ms, &box_ms, &contacts}) v->reserve(result.measured_steps);
   const std::uint64_t report_every = std::max<std::uint64_t>(1, total / 200);
   for (std::uint64_t i = 1; i <= total; ++i) {
     ffd::step(model, state, scratch, report);
@@ -108,28 +96,79 @@ ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scena
       collision_ms.push_back(static_cast<double>(collision_ns) * 1e-6);
       step_ms.push_back(static_cast<double>(report.total_ns) * 1e-6);
       dynamics_ms.push_back(static_cast<double>(stage(report, ffd::Stage::Dynamics)) * 1e-6);
-      const auto& narrow = report.counters[static_cast<std::size_t>(ffd::Stage::NarrowPhase)];
-      const auto& planes = report.counters[static_cast<std::size_t>(ffd::Stage::Planes)];
-      const std::uint32_t n = narrow.inter_contacts + narrow.self_contacts + planes.plane_contacts;
-      contacts.push_back(n);
-      result.contacts_max = std::max(result.contacts_max, n);
-      result.max_penetration_m = std::max(result.max_penetration_m, report.max_box_penetration_m);
+      box_ms.push_back(static_cast<double>(stage(report, ffd::Stage::BoxUpdate)) * 1e-6);
+      if (record) {
+        const auto& narrow = report.counters[static_cast<std::size_t>(ffd::Stage::NarrowPhase)];
+        const auto& planes = report.counters[static_cast<std::size_t>(ffd::Stage::Planes)];
+        const std::uint32_t n = narrow.inter_contacts + narrow.self_contacts + planes.plane_contacts;
+        contacts.push_back(n);
+        result.contacts_max = std::max(result.contacts_max, n);
+        result.max_penetration_m = std::max(result.max_penetration_m, report.max_box_penetration_m);
+      }
     }
-    for (int m = 0; m < 3; ++m) {
-      if (i != record_at[m] || model.hash_table_size == 0) continue;
+    for (int m = 0; m < 3 && record; ++m) {
+      if (i != record_at[m] || !model.collides) continue;
       ffd::update_all_boxes(model, state, record_scratch);
-      result.box_sets.push_back(record_boxes(model, record_scratch, scenario.key, moment_names[m], state.step));
+      result.box_sets.push_back(record_boxes(shared_model, record_scratch, result.scenario.key, moment_names[m], state.step));
     }
     if (i % report_every == 0 || i == total)
-      progress(scenario.key + (i <= result.warmup_steps ? ": warm-up" : ": measuring"), i, total);
+      progress(result.scenario.key + ": " + label + (i <= result.warmup_steps ? ", warm-up" : ", measuring"), i, total);
   }
-  result.collision_mean_ms = mean(collision_ms);
-  result.collision_p99_ms = percentile(collision_ms, 0.99);
-  result.step_mean_ms = mean(step_ms);
-  result.step_p99_ms = percentile(step_ms, 0.99);
-  result.dynamics_mean_ms = mean(dynamics_ms);
-  result.contacts_mean = mean(contacts);
-  result.state_hash = ffd::hash_hex(ffd::state_hash(state));
+  ThreadRun run;
+  run.threads = pool.threads();
+  run.collision_mean_ms = mean(collision_ms);
+  run.collision_p99_ms = percentile(collision_ms, 0.99);
+  run.step_mean_ms = mean(step_ms);
+  run.step_p99_ms = percentile(step_ms, 0.99);
+  run.dynamics_mean_ms = mean(dynamics_ms);
+  run.box_update_mean_ms = mean(box_ms);
+  run.state_hash = ffd::hash_hex(ffd::state_hash(state));
+  if (record) result.contacts_mean = mean(contacts);
+  return run;
+}
+
+}  // namespace
+
+ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
+                              const Progress& progress) {
+  ScenarioResult result;
+  result.scenario = scenario;
+  result.warmup_steps = quick ? scenario.quick_warmup_steps : scenario.warmup_steps;
+  result.measured_steps = quick ? scenario.quick_measured_steps : scenario.measured_steps;
+
+  progress(scenario.key + ": loading", 0, result.warmup_steps + result.measured_steps);
+  const auto load_start = std::chrono::steady_clock::now();
+  const ffd::SceneSpec spec = ffd::load_scene_file(scenarios_dir + "/" + scenario.scene_file);
+  std::vector<std::string> log;
+  const auto shared_model = std::make_shared<const ffd::Model>(ffd::compile(spec, log));
+  const ffd::Model& model = *shared_model;
+  result.load_s = seconds_since(load_start);
+  result.objects = model.objects.size();
+  for (const ffd::ObjectModel& o : model.objects) {
+    result.triangles += o.surface.triangles.size();
+    if (o.dynamics == ffd::DynamicsKind::MassSpring)
+      result.spring_projections += static_cast<std::size_t>(o.spring_end - o.spring_begin) * o.mass_spring.iterations;
+  }
+  result.springs = model.springs.size();
+  result.cells = model.cell_count();
+  result.boxes = model.box_count();
+  result.nodes = model.node_count();
+
+  result.single = run_scenario(shared_model, result, 1, true, progress, "1 thread");
+  result.parallel = run_scenario(shared_model, result, threads, false, progress, std::to_string(threads) + " threads");
+  if (result.parallel.state_hash != result.single.state_hash)
+    throw std::runtime_error(scenario.key + ": the state after " + std::to_string(result.warmup_steps + result.measured_steps) +
+                             " steps differs between 1 and " + std::to_string(threads) + " threads (" +
+                             result.single.state_hash + " and " + result.parallel.state_hash + ")");
+  result.collision_mean_ms = result.single.collision_mean_ms;
+  result.collision_p99_ms = result.single.collision_p99_ms;
+  result.step_mean_ms = result.single.step_mean_ms;
+  result.step_p99_ms = result.single.step_p99_ms;
+  result.dynamics_mean_ms = result.single.dynamics_mean_ms;
+  result.state_hash = result.single.state_hash;
+  if (result.spring_projections > 0)
+    result.ns_per_spring_projection = result.single.dynamics_mean_ms * 1e6 / static_cast<double>(result.spring_projections);
+  if (result.boxes > 0) result.ns_per_box_update = result.single.box_update_mean_ms * 1e6 / static_cast<double>(result.boxes);
   return result;
 }
 
@@ -149,19 +188,26 @@ std::string cpu_description() {
 
 std::string markdown_table(const std::vector<ScenarioResult>& results, const std::string& cpu, bool quick) {
   std::ostringstream s;
+  const int threads = results.empty() ? 2 : results.front().parallel.threads;
   s << "Machine: " << cpu << ". Paper: Pentium D 3.0 GHz, 2 GB RAM (Table 1, as printed).";
   if (quick) s << " **Quick run** (`--quick`: short windows, figures indicative only).";
   s << "\n\n";
-  s << "| scenario | triangles (paper / ours) | FFD cells (paper / ours) | collision ms/step: paper | ours mean | ours p99 "
-       "| target p99 | whole step ms: mean / p99 | contacts/step: mean / max |\n";
-  s << "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  s << "| scenario | triangles (paper / ours) | FFD cells (paper / ours) | collision ms/step: paper | ours p99, 1 / "
+    << threads << " threads | target p99 | whole step ms p99, 1 / " << threads
+    << " threads | speed-up | target p99 | contacts/step: mean / max |\n";
+  s << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  const auto met = [](double value, double target) { return value <= target ? "" : " ✗"; };
   for (const ScenarioResult& r : results) {
     s << "| " << r.scenario.key << " | " << thousands(r.scenario.paper.triangles) << " / " << thousands(r.triangles)
       << " | " << thousands(r.scenario.paper.cells) << " / " << thousands(r.cells) << " | "
       << fixed(r.scenario.paper.collision_ms, r.scenario.paper.collision_ms < 10 ? 1 : 0) << " | "
-      << fixed(r.collision_mean_ms, 3) << " | " << fixed(r.collision_p99_ms, 3) << " | "
-      << fixed(r.scenario.target_p99_ms, 2) << " | " << fixed(r.step_mean_ms, 2) << " / " << fixed(r.step_p99_ms, 2)
-      << " | " << fixed(r.contacts_mean, 0) << " / " << r.contacts_max << " |\n";
+      << fixed(r.single.collision_p99_ms, 3) << " / " << fixed(r.parallel.collision_p99_ms, 3)
+      << met(r.parallel.collision_p99_ms, r.scenario.target_p99_ms) << " | " << fixed(r.scenario.target_p99_ms, 2)
+      << " | " << fixed(r.single.step_p99_ms, 2) << " / " << fixed(r.parallel.step_p99_ms, 2)
+      << met(r.parallel.step_p99_ms, r.scenario.target_step_p99_ms) << " | "
+      << fixed(r.parallel.step_p99_ms > 0 ? r.single.step_p99_ms / r.parallel.step_p99_ms : 0.0, 2) << "× | "
+      << fixed(r.scenario.target_step_p99_ms, 2) << " | " << fixed(r.contacts_mean, 0) << " / " << r.contacts_max
+      << " |\n";
   }
   s << "\nCollision handling = FFD AABB update + broad phase + narrow phase with its responses + planes, per step, "
        "over the measured steps after the warm-up (";
@@ -170,10 +216,32 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
     s << (i ? "; " : "") << r.scenario.key << " " << thousands(static_cast<double>(r.warmup_steps)) << " + "
       << thousands(static_cast<double>(r.measured_steps));
   }
-  s << " steps of 1 ms). The whole step adds the lattice dynamics (mass-spring, XPBD). Single thread. "
-       "The paper's bunny row (five bunnies) stands beside both spring variants.\n";
+  s << " steps of 1 ms). The whole step adds the lattice dynamics (mass-spring, XPBD). Each scenario runs on 1 thread, "
+       "then on "
+    << threads
+    << " (the same final state, checked); speed-up = whole-step p99 on 1 thread / on " << threads
+    << ". ✗: above the target. The paper's bunny row (five bunnies) stands beside both spring variants.\n\n";
+  s << "Per element, 1 thread (mean over the measured steps; targets: a spring projection ≤ 1.5 ns, an FFD AABB "
+       "update ≤ 15 ns):\n\n";
+  s << "| scenario | springs | spring projections/step | ns per spring projection | FFD AABBs | ns per FFD AABB update "
+       "|\n|---|---:|---:|---:|---:|---:|\n";
+  for (const ScenarioResult& r : results)
+    s << "| " << r.scenario.key << " | " << thousands(static_cast<double>(r.springs)) << " | "
+      << thousands(static_cast<double>(r.spring_projections)) << " | " << fixed(r.ns_per_spring_projection, 2)
+      << met(r.ns_per_spring_projection, 1.5) << " | " << thousands(static_cast<double>(r.boxes)) << " | "
+      << fixed(r.ns_per_box_update, 1) << met(r.ns_per_box_update, 15.0) << " |\n";
+  s << "\nA spring projection: the dynamics stage (prediction, projections, velocities) over springs × iterations. "
+       "An FFD AABB update: eq. 2 for its 9 nodes and its world AABB.\n";
   return s.str();
 }
+
+namespace {
+nlohmann::json thread_json(const ThreadRun& r) {
+  return {{"threads", r.threads},          {"collision_mean_ms", r.collision_mean_ms}, {"collision_p99_ms", r.collision_p99_ms},
+          {"step_mean_ms", r.step_mean_ms}, {"step_p99_ms", r.step_p99_ms},           {"dynamics_mean_ms", r.dynamics_mean_ms},
+          {"state_hash", r.state_hash}};
+}
+}  // namespace
 
 nlohmann::json to_json(const std::vector<ScenarioResult>& results) {
   nlohmann::json rows = nlohmann::json::array();
@@ -203,7 +271,12 @@ nlohmann::json to_json(const std::vector<ScenarioResult>& results) {
                     {"contacts_max", r.contacts_max},
                     {"max_box_penetration_m", r.max_penetration_m},
                     {"finite", r.finite},
-                    {"state_hash", r.state_hash}});
+                    {"state_hash", r.state_hash},
+                    {"target_step_p99_ms", r.scenario.target_step_p99_ms},
+                    {"threads", {thread_json(r.single), thread_json(r.parallel)}},
+                    {"spring_projections_per_step", r.spring_projections},
+                    {"ns_per_spring_projection", r.ns_per_spring_projection},
+                    {"ns_per_box_update", r.ns_per_box_update}});
   }
   return rows;
 }

@@ -27,6 +27,7 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
       ->capture_default_str();
   cmd->add_option("--update-readme", o.readme, "Also replace the <!-- accuracy:table:begin --> section of this file");
   cmd->add_option("--plot", o.plot, "Also copy the plot to this PNG file");
+  add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
 }
 
@@ -55,7 +56,8 @@ int run_accuracy_command(const AccuracyOptions& o) {
       const ffd::Model model = ffd::compile_scene(spec, file, log);
       const std::string name = spec.name.empty() ? std::filesystem::path(file).stem().string() : spec.name;
       for (int level : levels) {
-        runs.push_back(ffdbench::run_accuracy(model, name, static_cast<ffd::Accuracy>(level), o.steps, 50, std::ref(progress)));
+        runs.push_back(ffdbench::run_accuracy(model, name, static_cast<ffd::Accuracy>(level), o.steps, 50, std::ref(progress),
+                                              thread_count(o.threads)));
         const ffdbench::AccuracyRun& r = runs.back();
         finite = finite && r.finite;
         char line[256];

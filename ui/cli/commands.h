@@ -19,9 +19,14 @@ inline constexpr int kExitAssertionFailed = 4;  // a replay assertion failed
 void ensure_folder(const std::string& dir);
 void ensure_parent_folder(const std::string& file_path);
 
+// Threads a step is spread over (--threads): 0 means ffd::default_thread_count().
+int thread_count(int option);
+void add_threads_option(CLI::App& command, int& threads);
+
 struct SimulateOptions {
   std::string scene;  // empty = the default scene
   long long steps = 3000;
+  int threads = 0;
   std::string report_path;
   long long obj_every = 0;
   std::string out_dir;
@@ -36,6 +41,7 @@ struct ReplayOptions {
   std::string report_path;
   double period_us = 1000.0, budget_us = 1000.0;
   bool skip_latency = false;
+  int threads = 0;
   bool quiet = false;
 };
 void register_replay(CLI::App& app, ReplayOptions& options);
@@ -55,6 +61,7 @@ struct RunOptions {
   std::string report_path;
   double period_us = 1000.0, budget_us = 1000.0, spin_us = 20.0;
   bool auto_accuracy = false;  // budget-aware accuracy from the scene's level up
+  int threads = 0;
   bool quiet = false;
 };
 void register_run(CLI::App& app, RunOptions& options);
@@ -66,6 +73,7 @@ struct BenchOptions {
   std::vector<std::string> only;  // scenario keys; empty = all
   std::string readme;             // Markdown file whose bench sections are replaced
   int repetitions = 20;
+  int threads = 0;                // the second thread count of every row (the first is 1)
   bool quiet = false;
 };
 void register_bench(CLI::App& app, BenchOptions& options);
@@ -78,6 +86,7 @@ struct AccuracyOptions {
   std::string out_dir = "out/accuracy";
   std::string readme;               // Markdown file whose accuracy section is replaced
   std::string plot;                 // where the PNG is also copied
+  int threads = 0;
   bool quiet = false;
 };
 void register_accuracy(CLI::App& app, AccuracyOptions& options);

@@ -39,7 +39,7 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   sizes["ffd_aabbs"] = model.box_count();
   sizes["springs"] = model.springs.size();
   sizes["regions"] = model.regions.size();
-  sizes["hash_table_size"] = model.hash_table_size;
+
   report["model"] = sizes;
   json stages = json::object();
   json pipeline = json::array();

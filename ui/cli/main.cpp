@@ -4,8 +4,19 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "ffd/worker_pool.h"
 
 namespace ffdsim {
+int thread_count(int option) { return option > 0 ? option : ffd::default_thread_count(); }
+
+void add_threads_option(CLI::App& command, int& threads) {
+  command
+      .add_option("--threads", threads,
+                  "Threads a step is spread over, this one included (default: 2 on a machine with 2 cores or "
+                  "more); the results are bit-identical whatever the count")
+      ->check(CLI::Range(1, 64));
+}
+
 void ensure_folder(const std::string& dir) {
   if (dir.empty()) return;
   std::error_code ec;

@@ -20,6 +20,7 @@ void register_replay(CLI::App& app, ReplayOptions& o) {
   cmd->add_option("--budget-us", o.budget_us, "Latency budget per step, microseconds")->check(CLI::Range(1.0, 1e7));
   cmd->add_flag("--skip-latency", o.skip_latency,
                 "Report latency limits as SKIP (for sanitizer and debug builds, whose steps are far slower)");
+  add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only failures and errors");
 }
 
@@ -37,6 +38,7 @@ int run_replay_command(const ReplayOptions& o) {
   run.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);
   run.budget_ns = static_cast<std::int64_t>(o.budget_us * 1000.0);
   run.check_latency = !o.skip_latency;
+  run.threads = thread_count(o.threads);
   const ffd::ReplayResult result = ffd::run_replay(replay, run);
   const std::string text = ffd::format_replay_result(replay.script, result);
   if (!o.quiet || !result.passed()) std::fputs(text.c_str(), result.passed() ? stdout : stderr);

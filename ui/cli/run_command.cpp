@@ -66,10 +66,12 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
                 steps, 1e6 / o.period_us, o.budget_us, interrupted ? " (interrupted)" : "");
     print_distribution("compute", compute);
     print_distribution("lateness", lateness);
-    std::printf("deadline misses %llu (%.2f%%), overruns re-phased %llu, late commands %llu; SCHED_FIFO %s, mlockall %s\n",
+    std::printf("deadline misses %llu (%.2f%%), overruns re-phased %llu, late commands %llu; %d thread%s, SIMD %s; "
+                "SCHED_FIFO %s, mlockall %s\n",
                 static_cast<unsigned long long>(f.counters.deadline_misses),
                 steps ? 100.0 * static_cast<double>(f.counters.deadline_misses) / static_cast<double>(steps) : 0.0,
                 static_cast<unsigned long long>(f.counters.overruns), static_cast<unsigned long long>(f.counters.commands_late),
+                f.counters.threads, f.counters.threads == 1 ? "" : "s", ffd::simd_target_name(),
                 f.counters.realtime_priority ? "yes" : "no", f.counters.memory_locked ? "yes" : "no");
     if (f.counters.accuracy_switches > 0 || o.auto_accuracy) {
       std::printf("accuracy: %llu switches; steps per level", static_cast<unsigned long long>(f.counters.accuracy_switches));
@@ -137,6 +139,7 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
   options.spin_ns = static_cast<std::int64_t>(o.spin_us * 1000.0);
   options.hash_every = static_cast<std::uint32_t>(o.hash_every);
   options.auto_accuracy = o.auto_accuracy;
+  options.threads = thread_count(o.threads);
   return options;
 }
 
@@ -144,6 +147,7 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
 RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   ffd::ui::SessionOptions options;
   options.loop = loop_options(o);
+  options.loop.frame_boxes = false;  // nobody draws them
   ffd::ui::Session session(scene_path, options);
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
   while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
@@ -191,6 +195,7 @@ void register_run(CLI::App& app, RunOptions& o) {
                 "Budget-aware accuracy: run the most accurate collision level whose steps fit the budget (from the "
                 "scene's level up); each switch is recorded");
   cmd->add_option("--spin-us", o.spin_us, "Busy-wait before each release, microseconds")->check(CLI::Range(0.0, 1e6));
+  add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
 

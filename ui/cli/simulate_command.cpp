@@ -10,6 +10,7 @@
 #include "ffd/mesh_import.h"
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
+#include "ffd/worker_pool.h"
 #include "json_report.h"
 
 namespace ffdsim {
@@ -74,6 +75,7 @@ void register_simulate(CLI::App& app, SimulateOptions& o) {
   CLI::Option* out = cmd->add_option("--out", o.out_dir, "Folder for the OBJ files of --obj-every");
   every->needs(out);
   out->needs(every);
+  add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
 
@@ -89,6 +91,8 @@ int run_simulate(const SimulateOptions& o) {
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     ffd::State state = ffd::initial_state(model);
     ffd::Scratch scratch = ffd::make_scratch(model);
+    ffd::WorkerPool pool(thread_count(o.threads));
+    ffd::attach_pool(model, scratch, pool);
     ffd::StepStatistics stats;
     stats.reserve(static_cast<std::size_t>(o.steps));
     ffd::StepReport report;
@@ -114,7 +118,10 @@ int run_simulate(const SimulateOptions& o) {
       out << json.dump(2) << '\n';
       if (!out) throw std::runtime_error(o.report_path + ": cannot write report");
     }
-    if (!o.quiet) print_summary(run, model, stats);
+    if (!o.quiet) {
+      std::printf("threads %d, SIMD %s\n", pool.threads(), ffd::simd_target_name());
+      print_summary(run, model, stats);
+    }
     return run.finite ? 0 : 3;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());

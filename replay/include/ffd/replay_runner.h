@@ -63,6 +63,7 @@ struct ReplayRunOptions {
   // false: every latency limit is reported as SKIP (sanitizer or debug builds, where a step
   // is tens of times slower and time limits say nothing about the product).
   bool check_latency = true;
+  int threads = 1;  // a step spread over this many threads (the same results whatever the count)
 };
 
 ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& options);

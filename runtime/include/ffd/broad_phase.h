@@ -1,8 +1,9 @@
 #pragma once
-// The spatial-hash broad phase (section 6.1) on its own, over given FFD AABBs: the very code
-// step() runs, for tools that set it against other broad phases on the same boxes
+// The broad phase (section 6.1) on its own, over given FFD AABBs of a compiled scene: the
+// very code step() runs, for tools that set it against other broad phases on the same boxes
 // (`ffdsim bench`'s race against FCL).
 #include <array>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -11,28 +12,33 @@
 
 namespace ffd {
 
-class SpatialHashBroadPhase {
+class BroadPhase {
  public:
-  // hash_cell_size: m (step() uses the largest object cell size); table_size: buckets.
-  SpatialHashBroadPhase(double hash_cell_size, Index table_size);
+  // The FFD AABBs (Model::boxes, accuracy level 2) of `model`, which must outlive this.
+  explicit BroadPhase(const Model& model);
 
-  // The boxes to hash next: the 9 world nodes of each FFD AABB (8 corners, then the centre
-  // of mass), as Scratch::box_nodes holds them after a step. Sizes the buffers.
+  // The boxes to pair next: the 9 world nodes of each FFD AABB (8 corners, then the centre of
+  // mass), as Scratch::box_nodes holds them after a step.
   void set_boxes(const std::vector<std::array<Vec3, 9>>& boxes);
 
-  // Hashes the boxes (their AABBs over the 9 nodes) and writes every candidate pair into
-  // `pairs` (cleared first): box a < box b, each pair once, their AABBs overlapping.
-  // Returns false when a box spans so many hash cells that the entry buffer ran out (its
-  // pairs are then missing); the buffer is grown for the next call.
-  bool find_pairs(std::vector<std::pair<Index, Index>>& pairs);
+  // Every pair of boxes whose AABBs (over their 9 nodes) overlap, touching included, each
+  // once, (a < b) sorted: what a general broad phase such as FCL's reports, neighbouring cells
+  // of one object included (those come from the lattice's neighbour lists, not a search).
+  // Returns false when a buffer ran out (pairs missing; it is grown for the next call).
+  bool find_all_pairs(std::vector<std::pair<Index, Index>>& pairs);
 
-  // The hash-time AABB of box b (valid after find_pairs).
-  const Vec3& box_min(Index b) const { return scratch_.box_min[b]; }
-  const Vec3& box_max(Index b) const { return scratch_.box_max[b]; }
+  // The pairs a step's narrow phase takes with inter- and self-collision on: boxes of
+  // different objects, and of one object's cells that share no lattice node.
+  bool find_wanted_pairs(std::vector<std::pair<Index, Index>>& pairs);
+
+  // The AABB of box b over its 9 nodes (valid after a find).
+  Vec3 box_min(Index b) const;
+  Vec3 box_max(Index b) const;
   std::size_t box_count() const { return model_.box_count(); }
 
  private:
-  Model model_;      // only the broad phase's fields are set
+  bool find(bool neighbours, std::vector<std::pair<Index, Index>>& pairs);
+  const Model& model_;
   Scratch scratch_;
 };
 

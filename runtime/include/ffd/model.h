@@ -44,6 +44,7 @@ struct ObjectModel {
   Index cell_begin = 0, cell_end = 0;      // range in Model::cell_*
   Index box_begin = 0, box_end = 0;        // range in Model::boxes
   Index spring_begin = 0, spring_end = 0;  // range in Model::springs
+  Index colour_begin = 0, colour_end = 0;  // range in Model::spring_colours (mass-spring)
   Index tetrahedron_begin = 0, tetrahedron_end = 0;  // range in Model::tetrahedra
   Index region_begin = 0, region_end = 0;  // range in Model::regions
   // The embedded surface: rest positions, and for every vertex its cell and local
@@ -56,6 +57,16 @@ struct ObjectModel {
 struct Spring {
   Index a, b;          // global node indices
   double rest_length;  // m
+};
+
+// The springs of an object in Gauss-Seidel order, colour by colour: a greedy colouring at
+// compile time, so that no two springs of a colour share a node. A colour's springs are then
+// solved several lanes at a time (kernels/spring_kernels.h) with exactly the result of solving
+// them one after the other. The last colour (63) takes whatever the others could not, and may
+// share nodes: it is solved one spring at a time.
+struct SpringColour {
+  Index begin, end;  // springs, in Model::springs
+  bool independent;  // no two of its springs share a node
 };
 
 // A volume constraint of a mass-spring cell (MassSpringParams::bulk_modulus): one of the six
@@ -76,11 +87,24 @@ struct Region {
 // One set of collision boxes over the lattice cells, each given by 8 corners and a centre
 // node in its cell's local coordinates (s, t, u), moved by trilinear FFD (eq. 2). Boxes are
 // stored in cell order, so the boxes of cell c are [cell_box_begin[c], cell_box_begin[c + 1]).
+// Boxes are updated kBoxLanes at a time (kernels/box_kernels.h).
+inline constexpr Index kBoxLanes = 4;
+
 struct BoxSet {
   std::vector<Index> box_cell;                  // lattice cell of each box
   std::vector<std::array<Vec3, 9>> box_local;   // corner k = (k & 1, k >> 1 & 1, k >> 2 & 1), then the centre
   std::vector<Index> cell_box_begin;            // (C + 1)
+  std::vector<Vec3i> box_lattice;               // lattice coordinates of each box's cell
+  // The same boxes for the update kernel, in blocks of kBoxLanes boxes (the last block
+  // padded with copies of its last box), each field a row of kBoxLanes lanes. Every box is
+  // axis-aligned in its cell's local frame, so its corners are the 2 x 2 x 2 products of
+  // (lo, hi) per axis: per block 9 rows (lo s, t, u; hi s, t, u; centre s, t, u) of `local`,
+  // and 8 rows of `corner`: where its cell's corner j starts in the State's positions (3 x
+  // the node index, x first).
+  std::vector<double> kernel_local;
+  std::vector<std::int64_t> kernel_corner;
   std::size_t size() const { return box_cell.size(); }
+  std::size_t block_count() const { return (size() + kBoxLanes - 1) / kBoxLanes; }
 };
 
 // Accuracy level 3's surface nodes per FFD AABB: the extreme points of the surface in its
@@ -142,7 +166,11 @@ struct Model {
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
   std::uint32_t sleep_steps = 0;         // "sleeping": sleep_time in steps (>= 1)
 
-  std::vector<Spring> springs;
+  std::vector<Spring> springs;          // Gauss-Seidel order: colour by colour
+  std::vector<SpringColour> spring_colours;
+  // The same springs as arrays for the kernels: their nodes, and rest lengths (m).
+  std::vector<std::int64_t> spring_node_a, spring_node_b;
+  std::vector<double> spring_rest_length;
   std::vector<Tetrahedron> tetrahedra;
   std::vector<Region> regions;
   std::vector<Index> region_members;      // node indices
@@ -150,10 +178,8 @@ struct Model {
 
   std::vector<PlaneModel> planes;
 
-  // Broad phase.
-  Index hash_table_size = 0;  // 0 when the scene has no collisions at all
-  Index sub_box_hash_table_size = 0;  // level 4's: its several boxes a cell get as many buckets
-  double hash_cell_size = 0.0;
+  // Broad phase: boxes of different objects or of one object are paired (an effect asks).
+  bool collides = false;
 
   std::size_t node_count() const { return node_rest.size(); }
   std::size_t cell_count() const { return cell_nodes.size(); }

@@ -44,6 +44,7 @@ struct LoopOptions {
   std::uint32_t hash_every = 100;      // state hash into the telemetry every N steps (0: never)
   std::uint32_t energy_every = 10;     // total energy into the telemetry every N steps (0: never)
   std::uint32_t frame_every = 1;       // fill a frame every N steps (0: no frames)
+  bool frame_boxes = true;             // frames carry the FFD AABBs (0.3 MB a frame for the teapots)
   std::uint32_t snapshot_every = 0;    // lattice snapshot every N steps (0: none)
   std::size_t telemetry_capacity = 1 << 14;  // records: 16 s of stalled reader at 1 kHz
   std::size_t command_capacity = 1 << 12;    // commands held for future steps
@@ -52,8 +53,14 @@ struct LoopOptions {
   // turns it on and off while the loop runs. Its switches go out on the applied stream.
   bool auto_accuracy = false;
   AccuracyGovernorSettings governor;
-  // Called on the physics thread just before the first tick and after the last one (for
-  // naming or pinning the thread, and for tests that count what the loop does).
+  // Threads a step is spread over, the physics thread included (worker_pool.h). The workers
+  // are created with the loop, before its first step; in real time they run at the physics
+  // thread's priority and sleep until the same release time between steps. The results are
+  // bit-identical whatever the count.
+  int threads = 1;
+  // Called on the physics thread just before the first tick and after the last one, and on
+  // each worker thread as it starts and ends (for naming or pinning the threads, and for
+  // tests that count what the loop does).
   std::function<void()> on_thread_start, on_thread_stop;
 };
 
@@ -83,7 +90,7 @@ struct Telemetry {
 struct Frame {
   std::uint64_t step = 0;
   std::vector<Vec3> nodes;                 // (N) lattice node positions, m
-  std::vector<std::array<Vec3, 9>> boxes;  // (B) FFD AABB: 8 corners, then centre of mass, m
+  std::vector<std::array<Vec3, 9>> boxes;  // (B) FFD AABB: 8 corners, then centre of mass, m (LoopOptions::frame_boxes)
   std::vector<std::uint8_t> asleep;        // (O) 1 for an object asleep (the "sleeping" effect)
   std::vector<Contact> contacts;           // [0, contact_count) hold this step's contacts
   std::uint32_t contact_count = 0;
@@ -116,7 +123,8 @@ struct LoopCounters {
   std::uint64_t commands_unrecorded = 0;  // real time only: applied, but the recorder fell behind
   std::uint64_t frames_published = 0;
   std::uint64_t accuracy_switches = 0;    // made by the budget-aware governor
-  bool realtime_priority = false;         // SCHED_FIFO was granted
+  bool realtime_priority = false;         // SCHED_FIFO was granted (to the workers too)
+  int threads = 1;                        // the physics thread and its workers
   bool memory_locked = false;             // mlockall succeeded
 };
 

@@ -123,8 +123,7 @@ struct SimulationSettings {
   double beta = 0.3;                     // friction, eq. 8, [0, 1]
   std::uint64_t seed = 1;                // for anything random a scene asks for
   EffectSet effects = 0;
-  int hash_table_size = 4000;            // buckets (paper: 4000); grown for large scenes
-  double hash_cell_size = 0.0;           // m; 0 = the largest object cell size
+  double hash_cell_size = 0.0;           // m; broad-phase grid cell edge, 0 = the objects' cell sizes
   double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
   Accuracy accuracy = Accuracy::CentreOfMass;  // starting level; commands may switch it
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]

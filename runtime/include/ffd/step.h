@@ -12,7 +12,14 @@
 
 namespace ffd {
 
+class WorkerPool;
+
 // Work counters of one stage in one step. A counter a stage has no use for stays zero.
+// A candidate pair of the broad phase: boxes a < b of the accuracy level's box set.
+struct BoxPair {
+  Index a, b;
+};
+
 struct StageCounters {
   std::uint32_t boxes_updated = 0;      // FFD AABBs recomputed from the lattice (eq. 2)
   std::uint32_t hash_entries = 0;       // (box, hash cell) entries inserted
@@ -45,7 +52,7 @@ struct StepReport {
   std::int64_t total_ns = 0;
   double max_box_penetration_m = 0.0;  // deepest node-in-box or node-below-plane depth r
   bool finite = true;                  // every x and v finite after the step
-  bool hash_overflow = false;          // broad phase ran out of entry room; grow_scratch() fixes it
+  bool hash_overflow = false;          // broad phase ran out of room for grid entries or pairs; grow_scratch() fixes it
   std::uint32_t contacts_recorded = 0; // Scratch::contacts[0 .. contacts_recorded) hold this step's
   std::uint32_t contacts_dropped = 0;  // contacts beyond Scratch::contacts' capacity (not recorded)
 };
@@ -57,21 +64,55 @@ struct Scratch {
   // lattice nodes and makes the boxes of the neighbouring cells stale).
   std::vector<std::array<Vec3, 9>> box_nodes;
   std::vector<std::uint8_t> box_valid;
-  std::vector<Vec3> box_min, box_max;  // world AABB of each box's nodes at hash time
-  // Sleeping only (else empty): how far (m) each box reaches beyond its nodes in the hash,
-  // so that an object moving wakes a sleeper before it touches it (sleep.h).
+  std::vector<std::uint8_t> box_moved;
+  double narrow_retested_share = 0.0;   // of the last narrow phase's pairs, those tested again  // a response moved the box's nodes since the narrow phase's detection
+  // Per axis, the world AABB of each box's nodes (from the box update; the broad phase grows
+  // it by its margins), m.
+  std::array<std::vector<double>, 3> box_lo, box_hi;
+  // Sleeping only (else empty): how far (m) each box reaches beyond its nodes in the broad
+  // phase, so that an object moving wakes a sleeper before it touches it (sleep.h).
   std::vector<double> box_wake_margin;
-  // Spatial hash as counting-sorted arrays: bucket b holds entries[bucket_begin[b] ..
-  // bucket_begin[b + 1]).
-  struct HashEntry {
-    Index box;
-    std::int64_t gx, gy, gz;  // integer hash-grid coordinates
+  // Broad phase (broad_phase.cpp): each object's bounds, the objects in sweep order, and its
+  // tasks (an object's own pairs: a == b; a pair of objects whose bounds meet: a < b), run
+  // over the pool, each thread in its own workspace (attach_pool()).
+  std::vector<std::array<double, 3>> object_lo, object_hi;
+  std::vector<Index> object_order;
+  struct PairTask {
+    Index a, b;
   };
-  std::vector<Index> bucket_begin;      // (T + 1) for the largest table of any level
-  Index hash_table_size = 0;            // T of the table built last
-  std::vector<HashEntry> entries;       // capacity grown between steps
-  std::vector<HashEntry> entries_unsorted;
-  std::vector<Index> entry_bucket;
+  std::vector<PairTask> pair_tasks;  // capacity grown between steps
+  // A thread's room for one task: boxes picked from one object or a pair, the grid over them
+  // (counting-sorted: cell c holds grid_entries[grid_begin[c] .. grid_begin[c + 1])), and the
+  // pairs it found.
+  struct PairWorkspace {
+    std::vector<Index> box_list_a, box_list_b;
+    std::vector<std::array<int, 6>> box_range;     // grid cells a listed box covers: x0, x1, y0, y1, z0, z1
+    std::vector<Index> grid_begin, grid_cursor;
+    std::vector<Index> grid_entries;               // capacity grown between steps
+    std::array<std::vector<int>, 3> cell_lattice;  // lattice coordinates of one grid cell's boxes
+    std::vector<Index> cell_far;                   // of them, those two or more lattice steps from one
+    std::vector<BoxPair> pairs;                    // capacity grown between steps
+    Index pair_count = 0;
+    bool dropped = false;
+    std::uint32_t entries = 0;                     // grid entries made (the hash_entries counter)
+  };
+  std::vector<PairWorkspace> pair_workspaces;
+  // The candidate pairs of this step, sorted, and whether the narrow phase's detection found a
+  // node of one box inside the other.
+  std::vector<BoxPair> pairs;       // [0, pair_count) used; capacity grown between steps
+  std::vector<std::uint8_t> pair_hit;
+  // Sorting the pairs into the order they are answered in (broad_phase.cpp).
+  struct PairKey {
+    std::uint64_t key;
+    BoxPair pair;
+  };
+  std::vector<PairKey> pair_keys, pair_sorted_keys;
+  std::array<Index, 257> radix_count{};
+  Index pair_count = 0;
+  bool pairs_dropped = false;       // a buffer was too small this step
+  // The worker threads the step spreads its work over (worker_pool.h); none: this thread
+  // alone. Owned by the caller (the physics loop, a tool), never by the Scratch.
+  WorkerPool* pool = nullptr;
   // Dynamics.
   std::vector<Vec3> x_prev;        // positions at the start of the step
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
@@ -80,6 +121,11 @@ struct Scratch {
   // `denominator_stiffness` (per object): recomputed only when a command changes it.
   std::vector<double> spring_inv_denominator;
   std::vector<double> denominator_stiffness;
+  // Scheduling the objects over the pool: each object's work (projections per step), the
+  // objects by decreasing work, and the tasks of this step.
+  std::vector<double> object_work;
+  std::vector<Index> objects_by_work;
+  std::vector<Index> object_tasks;
   std::vector<Vec3> goal_sum;      // shape matching: summed goal positions per node
   // Accuracy level 5. Each surface vertex as the lattice is now, mapped a cell at a time
   // when a step first needs it (a response clears the flags of the cells it moved), and the
@@ -112,11 +158,18 @@ struct Scratch {
 inline constexpr std::size_t kContactCapacity = 4096;
 
 Scratch make_scratch(const Model& model);
+// The step spreads its work over `pool` (which must outlive the Scratch's use), with room
+// for each of its threads. Call before stepping, not inside a step.
+void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool);
 // Makes room for what the last step reported it lacked (call between steps).
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last);
 
 // Advances `state` by one step of model.settings.dt and fills `report`.
 void step(const Model& model, State& state, Scratch& scratch, StepReport& report);
+
+// The SIMD target the step's kernels run on ("AVX3", "AVX2", "SSE4", "SCALAR", ...): the best
+// this CPU has, chosen at run time. Every target gives the same bits.
+const char* simd_target_name();
 
 // Recomputes the nodes of every box of the State's accuracy level from the lattice (eq. 2),
 // for tools that need the boxes of a State (frames, tests).

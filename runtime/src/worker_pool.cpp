@@ -1,0 +1,161 @@
+#include "ffd/worker_pool.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <time.h>
+
+namespace ffd {
+
+namespace {
+
+std::int64_t monotonic_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void sleep_until(std::int64_t deadline_ns) {
+  const timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000), static_cast<long>(deadline_ns % 1'000'000'000)};
+  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);  // EINTR: the caller loops
+}
+
+// A spin-wait hint to the core (x86 PAUSE): lets the sibling thread run and saves power.
+inline void relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
+// Spins before a worker outside a step naps: fast-mode steps follow each other within
+// microseconds, and a nap would make the next step start without it.
+constexpr std::int64_t kIdleSpinNs = 2'000'000;
+constexpr std::int64_t kNapNs = 100'000;
+// Inside a step: how long a worker waits for the next parallel part before it naps, and the nap.
+constexpr std::int64_t kStepSpinNs = 30'000;
+constexpr std::int64_t kStepNapNs = 200'000;
+// Inside a step a worker spins on PAUSE; after this many it also yields the core, so that
+// more threads than cores (8 threads on 2 cores, the determinism tests) still make progress.
+constexpr int kSpinsBeforeYield = 2048;
+
+}  // namespace
+
+int default_thread_count() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
+
+WorkerPool::WorkerPool(int threads, std::function<void()> on_worker_start, std::function<void()> on_worker_stop)
+    : on_worker_start_(std::move(on_worker_start)), on_worker_stop_(std::move(on_worker_stop)) {
+  const int workers = threads > 1 ? threads - 1 : 0;
+  workers_.reserve(static_cast<std::size_t>(workers));
+  for (int i = 0; i < workers; ++i) workers_.emplace_back([this, i] { work(static_cast<std::uint32_t>(i + 1)); });
+}
+
+WorkerPool::~WorkerPool() {
+  quit_.store(true, std::memory_order_release);
+  for (std::thread& t : workers_) t.join();
+}
+
+void WorkerPool::begin_step() {
+  wake_at_ns_.store(0, std::memory_order_relaxed);
+  in_step_.store(true, std::memory_order_release);
+}
+
+void WorkerPool::end_step(std::int64_t next_wake_ns) {
+  wake_at_ns_.store(next_wake_ns, std::memory_order_relaxed);
+  in_step_.store(false, std::memory_order_release);
+}
+
+bool WorkerPool::set_realtime_priority(int priority) {
+  bool all = true;
+  sched_param param{};
+  param.sched_priority = priority;
+  for (std::thread& t : workers_) all = pthread_setschedparam(t.native_handle(), SCHED_FIFO, &param) == 0 && all;
+  return all;
+}
+
+bool WorkerPool::claim_and_run(std::uint32_t job, std::uint32_t thread) {
+  std::uint64_t cursor = cursor_.load(std::memory_order_relaxed);
+  for (;;) {
+    if (static_cast<std::uint32_t>(cursor >> 32) != job) return false;
+    const std::uint32_t chunk = static_cast<std::uint32_t>(cursor);
+    // A successful claim proves the job is still open, so its fields are the ones written
+    // before the cursor was set (release / acquire below).
+    if (chunk >= chunks_.load(std::memory_order_relaxed)) return false;
+    if (cursor_.compare_exchange_weak(cursor, cursor + 1, std::memory_order_acquire, std::memory_order_relaxed)) {
+      fn_.load(std::memory_order_relaxed)(context_.load(std::memory_order_relaxed), chunk, thread);
+      done_.fetch_add(1, std::memory_order_release);
+      return true;
+    }
+  }
+}
+
+void WorkerPool::run(std::uint32_t chunks, ChunkFn fn, void* context) {
+  const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
+  fn_.store(fn, std::memory_order_relaxed);
+  context_.store(context, std::memory_order_relaxed);
+  chunks_.store(chunks, std::memory_order_relaxed);
+  done_.store(0, std::memory_order_relaxed);
+  cursor_.store(static_cast<std::uint64_t>(job) << 32, std::memory_order_release);
+  job_.store(job, std::memory_order_release);
+  while (claim_and_run(job, 0)) {
+  }
+  int spins = 0;
+  while (done_.load(std::memory_order_acquire) != chunks) {
+    relax();
+    if (++spins == kSpinsBeforeYield) {
+      spins = 0;
+      std::this_thread::yield();
+    }
+  }
+}
+
+void WorkerPool::work(std::uint32_t thread) {
+  if (on_worker_start_) on_worker_start_();
+  std::uint32_t seen = job_.load(std::memory_order_acquire);
+  std::int64_t idle_since = monotonic_ns();
+  int spins = 0;
+  while (!quit_.load(std::memory_order_acquire)) {
+    const std::uint32_t job = job_.load(std::memory_order_acquire);
+    if (job != seen) {
+      seen = job;
+      while (claim_and_run(job, thread)) {
+      }
+      idle_since = 0;
+      continue;
+    }
+    if (!in_step_.load(std::memory_order_acquire) && idle_since != 0 && wake_at_ns_.load(std::memory_order_relaxed) > 0)
+      idle_since = 0;  // a step ended: between steps the deadline decides
+    if (in_step_.load(std::memory_order_acquire)) {
+      // Between two parallel parts of a step (the narrow phase's responses run on the stepping
+      // thread alone): spin a little, then nap, so that a worker at the physics thread's
+      // real-time priority does not hold a core the viewer's renderer needs. A part that
+      // starts while it naps is taken by the stepping thread; no one has to wake it.
+      const std::int64_t now = monotonic_ns();
+      if (idle_since == 0) idle_since = now;
+      if (now - idle_since < kStepSpinNs) {
+        relax();
+        continue;
+      }
+      sleep_until(now + kStepNapNs);
+      continue;
+    }
+    // Between steps.
+    const std::int64_t now = monotonic_ns();
+    const std::int64_t wake_at = wake_at_ns_.load(std::memory_order_relaxed);
+    if (wake_at > now) {
+      sleep_until(wake_at);  // real time: up again just before the next release
+      continue;
+    }
+    if (idle_since == 0) idle_since = now;
+    if (now - idle_since < kIdleSpinNs) {
+      relax();
+      if (++spins == kSpinsBeforeYield) {
+        spins = 0;
+        std::this_thread::yield();
+      }
+      continue;
+    }
+    sleep_until(now + kNapNs);
+  }
+  if (on_worker_stop_) on_worker_stop_();
+}
+
+}  // namespace ffd
