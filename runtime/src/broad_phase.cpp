@@ -186,7 +186,8 @@ void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& obje
           for (Index j = i + 1; j < k; ++j) {
             far[count] = j;
             const int dx = cx[i] - cx[j], dy = cy[i] - cy[j], dz = cz[i] - cz[j];
-            count += static_cast<Index>((dx > 1) | (dx < -1) | (dy > 1) | (dy < -1) | (dz > 1) | (dz < -1));
+            count += static_cast<Index>(static_cast<unsigned>(dx + 1) > 2u) | static_cast<Index>(static_cast<unsigned>(dy + 1) > 2u) |
+                     static_cast<Index>(static_cast<unsigned>(dz + 1) > 2u);  // |d| > 1 on some axis
           }
           for (Index f = 0; f < count; ++f) {
             const Index a = entry[i], b = entry[far[f]];
@@ -199,11 +200,14 @@ void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& obje
 // Boxes of `object` whose AABBs reach into [lo, hi].
 Index boxes_within(const BoxSet& boxes, const ObjectModel& object, const std::array<double, 3>& lo,
                    const std::array<double, 3>& hi, const Scratch& s, Index* out) {
+  const double *lx = s.box_lo[0].data(), *ly = s.box_lo[1].data(), *lz = s.box_lo[2].data();
+  const double *hx = s.box_hi[0].data(), *hy = s.box_hi[1].data(), *hz = s.box_hi[2].data();
+  const double lo_x = lo[0], lo_y = lo[1], lo_z = lo[2], hi_x = hi[0], hi_y = hi[1], hi_z = hi[2];
   Index count = 0;
   for (Index b = first_box(boxes, object); b < end_box(boxes, object); ++b) {
-    out[count] = b;
-    count += static_cast<Index>((s.box_lo[0][b] <= hi[0]) & (s.box_hi[0][b] >= lo[0]) & (s.box_lo[1][b] <= hi[1]) &
-                                (s.box_hi[1][b] >= lo[1]) & (s.box_lo[2][b] <= hi[2]) & (s.box_hi[2][b] >= lo[2]));
+    out[count] = b;  // kept, in order, only if it reaches in (no branch to mispredict)
+    count += static_cast<Index>((lx[b] <= hi_x) & (hx[b] >= lo_x) & (ly[b] <= hi_y) & (hy[b] >= lo_y) &
+                                (lz[b] <= hi_z) & (hz[b] >= lo_z));
   }
   return count;
 }

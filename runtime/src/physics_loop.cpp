@@ -17,27 +17,18 @@
 #include "ffd/measure.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
+#include "monotonic_clock.h"
 
 namespace ffd {
 
 namespace {
-
-std::int64_t monotonic_ns() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 // Sleeps until `deadline_ns` on CLOCK_MONOTONIC (absolute, so errors never accumulate),
 // waking `spin_ns` early and spinning the rest: a sleep's wake-up is tens of microseconds
 // late on a virtual machine, a spin is not.
 void wait_until(std::int64_t deadline_ns, std::int64_t spin_ns) {
   const std::int64_t sleep_until = deadline_ns - spin_ns;
-  if (monotonic_ns() < sleep_until) {
-    timespec ts{static_cast<time_t>(sleep_until / 1'000'000'000), static_cast<long>(sleep_until % 1'000'000'000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
-    }  // EINTR: sleep again until the same absolute time
-  }
+  while (monotonic_ns() < sleep_until) sleep_until_ns(sleep_until);  // a signal: sleep again
   while (monotonic_ns() < deadline_ns) {
   }
 }

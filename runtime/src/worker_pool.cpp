@@ -1,23 +1,13 @@
 #include "ffd/worker_pool.h"
 
+#include "monotonic_clock.h"
+
 #include <pthread.h>
 #include <sched.h>
-#include <time.h>
 
 namespace ffd {
 
 namespace {
-
-std::int64_t monotonic_ns() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-void sleep_until(std::int64_t deadline_ns) {
-  const timespec ts{static_cast<time_t>(deadline_ns / 1'000'000'000), static_cast<long>(deadline_ns % 1'000'000'000)};
-  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);  // EINTR: the caller loops
-}
 
 // A spin-wait hint to the core (x86 PAUSE): lets the sibling thread run and saves power.
 inline void relax() {
@@ -134,14 +124,14 @@ void WorkerPool::work(std::uint32_t thread) {
         relax();
         continue;
       }
-      sleep_until(now + kStepNapNs);
+      sleep_until_ns(now + kStepNapNs);
       continue;
     }
     // Between steps.
     const std::int64_t now = monotonic_ns();
     const std::int64_t wake_at = wake_at_ns_.load(std::memory_order_relaxed);
     if (wake_at > now) {
-      sleep_until(wake_at);  // real time: up again just before the next release
+      sleep_until_ns(wake_at);  // real time: up again just before the next release
       continue;
     }
     if (idle_since == 0) idle_since = now;
@@ -153,7 +143,7 @@ void WorkerPool::work(std::uint32_t thread) {
       }
       continue;
     }
-    sleep_until(now + kNapNs);
+    sleep_until_ns(now + kNapNs);
   }
   if (on_worker_stop_) on_worker_stop_();
 }

@@ -65,6 +65,17 @@ Scene spheres(int count, const Vec3& centre, double spread, unsigned seed) {
   return s;
 }
 
+// One slab of `size` with self-collision on, undeformed.
+Scene slab(const Vec3& size) {
+  SceneSpec spec;
+  spec.settings.effects = static_cast<EffectSet>(Effect::SelfCollision);
+  spec.objects.push_back(test::box_object("slab", size, 0.02, Vec3::Zero()));
+  Scene s{test::compile_quietly(spec), {}, {}};
+  s.state = initial_state(s.model);
+  s.scratch = make_scratch(s.model);
+  return s;
+}
+
 void check_inter(const Vec3& centre, unsigned seed) {
   Scene s = spheres(60, centre, 0.08, seed);
   update_boxes(s.model, s.model.boxes, s.state, s.scratch);
@@ -95,12 +106,7 @@ TEST_CASE("broad phase: pairs between objects equal brute force far away", "[bro
 }
 
 TEST_CASE("broad phase: self pairs and neighbour pairs of a folded lattice equal brute force", "[broad_phase]") {
-  SceneSpec spec;
-  spec.settings.effects = static_cast<EffectSet>(Effect::SelfCollision);
-  spec.objects.push_back(test::box_object("slab", Vec3(0.3, 0.02, 0.1), 0.02, Vec3::Zero()));
-  Scene s{test::compile_quietly(spec), {}, {}};
-  s.state = initial_state(s.model);
-  s.scratch = make_scratch(s.model);
+  Scene s = slab(Vec3(0.3, 0.02, 0.1));
   // Fold the slab in two about x = 0 (the right half over the left, 1 cm above it) and
   // jitter every node, so that cells far apart in the lattice overlap.
   std::mt19937 rng(7);
@@ -128,12 +134,7 @@ TEST_CASE("broad phase: self pairs and neighbour pairs of a folded lattice equal
 }
 
 TEST_CASE("broad phase: an undeformed lattice gives no self pair, and no grid cell is paired", "[broad_phase]") {
-  SceneSpec spec;
-  spec.settings.effects = static_cast<EffectSet>(Effect::SelfCollision);
-  spec.objects.push_back(test::box_object("slab", Vec3(0.3, 0.1, 0.2), 0.02, Vec3::Zero()));
-  Scene s{test::compile_quietly(spec), {}, {}};
-  s.state = initial_state(s.model);
-  s.scratch = make_scratch(s.model);
+  Scene s = slab(Vec3(0.3, 0.1, 0.2));
   update_boxes(s.model, s.model.boxes, s.state, s.scratch);
   grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
   StageCounters counters;

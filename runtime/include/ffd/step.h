@@ -22,7 +22,7 @@ struct BoxPair {
 
 struct StageCounters {
   std::uint32_t boxes_updated = 0;      // FFD AABBs recomputed from the lattice (eq. 2)
-  std::uint32_t hash_entries = 0;       // (box, hash cell) entries inserted
+  std::uint32_t hash_entries = 0;       // (box, grid cell) entries the broad phase's grids held
   std::uint32_t inter_pairs_tested = 0; // box pairs of different objects given node tests
   std::uint32_t self_pairs_tested = 0;  // box pairs of one object given node tests
   std::uint32_t node_tests = 0;         // node-in-box or node-below-plane tests
