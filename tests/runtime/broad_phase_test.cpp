@@ -76,14 +76,19 @@ Scene slab(const Vec3& size) {
   return s;
 }
 
-void check_inter(const Vec3& centre, unsigned seed) {
-  Scene s = spheres(60, centre, 0.08, seed);
+// The boxes of the scene's State, then find_pairs with `query` as a step runs it.
+bool find(Scene& s, const PairQuery& query, StageCounters& counters) {
   update_boxes(s.model, s.model.boxes, s.state, s.scratch);
   grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  return find_pairs(s.model, s.model.boxes, query, s.scratch, counters);
+}
+
+void check_inter(const Vec3& centre, unsigned seed) {
+  Scene s = spheres(60, centre, 0.08, seed);
   StageCounters counters;
   PairQuery query;
   query.inter = true;
-  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  REQUIRE(find(s, query, counters));
   const auto expected = brute_force(s.scratch, s.model.box_count(), [&](Index a, Index b) {
     return s.model.cell_object[s.model.boxes.box_cell[a]] != s.model.cell_object[s.model.boxes.box_cell[b]];
   });
@@ -133,14 +138,12 @@ TEST_CASE("broad phase: self pairs and neighbour pairs of a folded lattice equal
   CHECK(found(s.scratch) == all);
 }
 
-TEST_CASE("broad phase: an undeformed lattice gives no self pair, and no grid cell is paired", "[broad_phase]") {
+TEST_CASE("broad phase: an undeformed lattice gives no self pair", "[broad_phase]") {
   Scene s = slab(Vec3(0.3, 0.1, 0.2));
-  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
-  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
   StageCounters counters;
   PairQuery query;
   query.self = true;
-  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  REQUIRE(find(s, query, counters));
   CHECK(s.scratch.pair_count == 0);
   CHECK(counters.hash_entries > s.model.box_count());
 }

@@ -24,7 +24,7 @@ HWY_INLINE void project_lanes(D d, const SpringSolve& s, std::size_t first) {
   // The lanes' nodes read one by one into rows (as fast as a hardware gather, and the same
   // code on every target).
   constexpr std::size_t kLanesMax = 8;
-  HWY_ALIGN double in[15][kLanesMax];
+  HWY_ALIGN double in[14][kLanesMax];
   for (std::size_t l = 0; l < hn::Lanes(d); ++l) {
     const double* a = s.x + 3 * s.node_a[first + l];
     const double* b = s.x + 3 * s.node_b[first + l];
