@@ -20,12 +20,24 @@ inline void relax() {
 // microseconds, and a nap would make the next step start without it.
 constexpr std::int64_t kIdleSpinNs = 2'000'000;
 constexpr std::int64_t kNapNs = 100'000;
-// Inside a step: how long a worker waits for the next parallel part before it naps, and the nap.
-constexpr std::int64_t kStepSpinNs = 30'000;
-constexpr std::int64_t kStepNapNs = 200'000;
+// Inside a step: how long a worker waits for the next parallel part before it naps, and the
+// nap. Longer than any sequential part of a step that fits the 1 ms budget (a worker that naps
+// misses the parts that start meanwhile: with 30 us the teapots' second teapot was solved on
+// the stepping thread most steps), shorter than the letters' sequential responses (ms), where
+// a spinning worker would hold a core the viewer's renderer needs.
+constexpr std::int64_t kStepSpinNs = 300'000;
+constexpr std::int64_t kStepNapNs = 100'000;
 // Inside a step a worker spins on PAUSE; after this many it also yields the core, so that
 // more threads than cores (8 threads on 2 cores, the determinism tests) still make progress.
 constexpr int kSpinsBeforeYield = 2048;
+
+void spin(int& spins) {
+  relax();
+  if (++spins == kSpinsBeforeYield) {
+    spins = 0;
+    std::this_thread::yield();
+  }
+}
 
 }  // namespace
 
@@ -88,18 +100,16 @@ void WorkerPool::run(std::uint32_t chunks, ChunkFn fn, void* context) {
   while (claim_and_run(job, 0)) {
   }
   int spins = 0;
-  while (done_.load(std::memory_order_acquire) != chunks) {
-    relax();
-    if (++spins == kSpinsBeforeYield) {
-      spins = 0;
-      std::this_thread::yield();
-    }
-  }
+  while (done_.load(std::memory_order_acquire) != chunks) spin(spins);
 }
 
 void WorkerPool::work(std::uint32_t thread) {
   if (on_worker_start_) on_worker_start_();
   std::uint32_t seen = job_.load(std::memory_order_acquire);
+  // Idle time is counted from the last job or from the last change between "in a step" and
+  // "between steps", whichever is later: a worker that slept until the release time and
+  // then spun must not count that wait against the step it starts.
+  bool stepping = false;
   std::int64_t idle_since = monotonic_ns();
   int spins = 0;
   while (!quit_.load(std::memory_order_acquire)) {
@@ -108,39 +118,36 @@ void WorkerPool::work(std::uint32_t thread) {
       seen = job;
       while (claim_and_run(job, thread)) {
       }
-      idle_since = 0;
+      idle_since = monotonic_ns();
       continue;
     }
-    if (!in_step_.load(std::memory_order_acquire) && idle_since != 0 && wake_at_ns_.load(std::memory_order_relaxed) > 0)
-      idle_since = 0;  // a step ended: between steps the deadline decides
-    if (in_step_.load(std::memory_order_acquire)) {
+    const bool in_step = in_step_.load(std::memory_order_acquire);
+    const std::int64_t now = monotonic_ns();
+    if (in_step != stepping) {
+      stepping = in_step;
+      idle_since = now;
+    }
+    if (in_step) {
       // Between two parallel parts of a step (the narrow phase's responses run on the stepping
-      // thread alone): spin a little, then nap, so that a worker at the physics thread's
-      // real-time priority does not hold a core the viewer's renderer needs. A part that
-      // starts while it naps is taken by the stepping thread; no one has to wake it.
-      const std::int64_t now = monotonic_ns();
-      if (idle_since == 0) idle_since = now;
+      // thread alone): spin, and nap only when the wait is long, so that a worker at the
+      // physics thread's real-time priority does not hold a core the viewer's renderer needs.
+      // A part that starts while it naps is taken by the stepping thread; no one wakes it.
       if (now - idle_since < kStepSpinNs) {
-        relax();
+        spin(spins);
         continue;
       }
       sleep_until_ns(now + kStepNapNs);
       continue;
     }
     // Between steps.
-    const std::int64_t now = monotonic_ns();
     const std::int64_t wake_at = wake_at_ns_.load(std::memory_order_relaxed);
     if (wake_at > now) {
       sleep_until_ns(wake_at);  // real time: up again just before the next release
+      idle_since = monotonic_ns();
       continue;
     }
-    if (idle_since == 0) idle_since = now;
     if (now - idle_since < kIdleSpinNs) {
-      relax();
-      if (++spins == kSpinsBeforeYield) {
-        spins = 0;
-        std::this_thread::yield();
-      }
+      spin(spins);
       continue;
     }
     sleep_until_ns(now + kNapNs);
