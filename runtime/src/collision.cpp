@@ -1,6 +1,7 @@
 #include "collision.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "ffd/box_test.h"
@@ -128,10 +129,44 @@ int tested_node_count(const BoxLevel& level) {
   return level.end_node - level.first_node + (level.samples ? kBoxSampleCount : 0);
 }
 
+// Where the answers to box pairs go: the stage's counters and the step's contact list (one
+// thread answering the pairs in order), or one thread's share of both (pairs answered in
+// waves), each contact keyed by its pair and its place within the pair.
+struct PairSink {
+  StageCounters& counters;
+  double& max_depth;
+  Index& retested;
+  Scratch& scratch;
+  Scratch::NarrowWorkspace* workspace = nullptr;  // none: straight into the step's list
+  std::uint64_t next_key = 0;
+
+  void record(const Vec3& point, const Vec3& normal, double depth, ContactKind kind) {
+    if (!workspace) {
+      scratch.record_contact(point, normal, depth, kind);
+      return;
+    }
+    // Keep the contacts.size() smallest keys: the front of the max-heap is the largest held.
+    Scratch::NarrowWorkspace& w = *workspace;
+    ++w.recorded;
+    const Scratch::KeyedContact contact{next_key++, {point, normal, depth, kind}};
+    const auto begin = w.contacts.begin();
+    const auto by_key = [](const Scratch::KeyedContact& a, const Scratch::KeyedContact& b) { return a.key < b.key; };
+    if (w.held < w.contacts.size()) {
+      w.contacts[w.held++] = contact;
+      std::push_heap(begin, begin + w.held, by_key);
+    } else if (w.held > 0 && contact.key < w.contacts.front().key) {
+      std::pop_heap(begin, begin + w.held, by_key);
+      w.contacts[w.held - 1] = contact;
+      std::push_heap(begin, begin + w.held, by_key);
+    }
+  }
+};
+
 // Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop).
 template <bool kFriction>
 void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index mover, Index container,
-                bool self, StageCounters& counters, double& max_depth) {
+                bool self, PairSink& sink) {
+  StageCounters& counters = sink.counters;
   const BoxSet& boxes = *level.boxes;
   const int node_count = tested_node_count(level);
   BoxPlanes planes = box_planes(scratch.box_nodes[container]);
@@ -148,8 +183,8 @@ void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch
     if (!hit.inside) continue;
     if (self) ++counters.self_contacts;
     else ++counters.inter_contacts;
-    max_depth = std::max(max_depth, hit.depth);
-    scratch.record_contact(node, planes.normal[hit.face], hit.depth, self ? ContactKind::Self : ContactKind::Inter);
+    sink.max_depth = std::max(sink.max_depth, hit.depth);
+    sink.record(node, planes.normal[hit.face], hit.depth, self ? ContactKind::Self : ContactKind::Inter);
     respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth);
     // Update both boxes at once so the remaining tests see the corrected state.
     invalidate_around(model, boxes, scratch, cell_a);
@@ -410,6 +445,131 @@ bool nodes_inside(const Model& model, const BoxLevel& level, const State& state,
   return false;
 }
 
+// Pair p of the step's list, answered as Algorithm 1 does: a pair with a node of one box in
+// the other, or whose boxes a response has moved since the detection, is tested again, and
+// each node found inside gets its response at once.
+template <bool kFriction>
+void answer_pair(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index p, PairSink& sink) {
+  const BoxSet& boxes = *level.boxes;
+  const Index b1 = scratch.pairs[p].a, b2 = scratch.pairs[p].b;
+  const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
+  if (state.asleep[object_1] && state.asleep[object_2]) return;  // two sleepers never meet
+  if (sleeping(model)) meet(state, object_1, object_2);  // a moving object wakes a sleeper it meets
+  const bool same_object = object_1 == object_2;
+  if (same_object) ++sink.counters.self_pairs_tested;
+  else ++sink.counters.inter_pairs_tested;
+  if (!scratch.pair_hit[p] && !scratch.box_moved[b1] && !scratch.box_moved[b2]) return;
+  ++sink.retested;
+  ensure_box(model, boxes, state, scratch, b1, sink.counters);
+  ensure_box(model, boxes, state, scratch, b2, sink.counters);
+  test_nodes<kFriction>(model, level, state, scratch, b1, b2, same_object, sink);
+  test_nodes<kFriction>(model, level, state, scratch, b2, b1, same_object, sink);
+}
+
+// A pair's answer reads and writes only its two objects: their nodes, their boxes' nodes and
+// flags, their sleep state. So a pair only has to wait for the earlier pairs of its two
+// objects, and pairs of other objects can be answered meanwhile on another thread. Each pair
+// takes a turn among each of its objects' pairs (their order in the list) and waits until
+// both objects have answered the turns before it; it then sees its objects exactly as the
+// sequential loop would have left them, and the result is Algorithm 1's, bit for bit. The
+// threads take the pairs in wave order (a pair's wave: one more than the last wave of a pair
+// sharing an object with it), so that the pairs taken side by side seldom wait on each other.
+// Worth it where the list holds many objects (the letters); a few objects (two teapots) make
+// about as many waves as pairs, and one thread answers them in order.
+template <bool kFriction>
+bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+                     StageCounters& counters, double& max_depth, Index& retested) {
+  constexpr Index kMinPairs = 64, kMinPairsPerWave = 2;  // below: waits and hand-offs cost more than they save
+  constexpr Index kPairsPerChunk = 16;
+  scratch.narrow_waves = 0;
+  const Index pairs = scratch.pair_count;
+  if (!scratch.pool || scratch.pool->threads() < 2 || pairs < kMinPairs || scratch.wave_pairs.size() < pairs)
+    return false;
+  const BoxSet& boxes = *level.boxes;
+  std::fill(scratch.object_wave.begin(), scratch.object_wave.end(), std::uint32_t{0});
+  std::fill(scratch.object_turn.begin(), scratch.object_turn.end(), std::uint32_t{0});
+  std::uint32_t waves = 0;
+  for (Index p = 0; p < pairs; ++p) {
+    const Index o1 = model.cell_object[boxes.box_cell[scratch.pairs[p].a]];
+    const Index o2 = model.cell_object[boxes.box_cell[scratch.pairs[p].b]];
+    const std::uint32_t wave = std::max(scratch.object_wave[o1], scratch.object_wave[o2]);
+    scratch.pair_wave[p] = wave;
+    scratch.object_wave[o1] = scratch.object_wave[o2] = wave + 1;
+    waves = std::max(waves, wave + 1);
+    scratch.pair_turn[p][0] = scratch.object_turn[o1]++;
+    scratch.pair_turn[p][1] = o2 == o1 ? scratch.pair_turn[p][0] : scratch.object_turn[o2]++;
+  }
+  if (static_cast<Index>(waves) * kMinPairsPerWave > pairs) return false;
+  scratch.narrow_waves = waves;
+  // The pairs by wave (a counting sort; list order within a wave).
+  std::vector<Index>& begin = scratch.wave_begin;
+  std::fill(begin.begin(), begin.begin() + waves + 1, Index{0});
+  for (Index p = 0; p < pairs; ++p) ++begin[scratch.pair_wave[p] + 1];
+  for (std::uint32_t w = 0; w < waves; ++w) begin[w + 1] += begin[w];
+  for (Index p = 0; p < pairs; ++p) scratch.wave_pairs[begin[scratch.pair_wave[p]]++] = p;
+
+  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) {
+    w.counters = StageCounters{};
+    w.max_depth = 0.0;
+    w.retested = 0;
+    w.held = 0;
+    w.recorded = 0;
+  }
+  std::fill(scratch.object_answered.begin(), scratch.object_answered.end(), std::uint32_t{0});
+  // Chunks are claimed in increasing order, and a pair waits only for pairs of earlier waves,
+  // which lie in earlier chunks (claimed, so being answered) or earlier in its own: the pair
+  // furthest behind never waits, so the answering always progresses.
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  scratch.pool->parallel_for(chunks, [&](std::uint32_t chunk, std::uint32_t thread) {
+    Scratch::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
+    PairSink sink{w.counters, w.max_depth, w.retested, scratch, &w};
+    for (Index i = chunk * kPairsPerChunk; i < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++i) {
+      const Index p = scratch.wave_pairs[i];
+      const Index o1 = model.cell_object[boxes.box_cell[scratch.pairs[p].a]];
+      const Index o2 = model.cell_object[boxes.box_cell[scratch.pairs[p].b]];
+      std::atomic_ref<std::uint32_t> answered_1(scratch.object_answered[o1]), answered_2(scratch.object_answered[o2]);
+      const std::array<std::uint32_t, 2> turn = scratch.pair_turn[p];
+      int spins = 0;
+      while (answered_1.load(std::memory_order_acquire) != turn[0] ||
+             answered_2.load(std::memory_order_acquire) != turn[1])
+        spin_wait(spins);
+      sink.next_key = static_cast<std::uint64_t>(p) << 20;  // a pair finds fewer than 2^20 contacts
+      answer_pair<kFriction>(model, level, state, scratch, p, sink);
+      answered_1.store(turn[0] + 1, std::memory_order_release);
+      if (o2 != o1) answered_2.store(turn[1] + 1, std::memory_order_release);
+    }
+  });
+
+  // The threads' shares, summed; their contacts merged in key order into the step's list.
+  const auto by_key = [](const Scratch::KeyedContact& a, const Scratch::KeyedContact& b) { return a.key < b.key; };
+  std::uint64_t found = 0;
+  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) {
+    const StageCounters& c = w.counters;
+    counters.boxes_updated += c.boxes_updated;
+    counters.node_tests += c.node_tests;
+    counters.inter_pairs_tested += c.inter_pairs_tested;
+    counters.self_pairs_tested += c.self_pairs_tested;
+    counters.inter_contacts += c.inter_contacts;
+    counters.self_contacts += c.self_contacts;
+    max_depth = std::max(max_depth, w.max_depth);
+    retested += w.retested;
+    found += w.recorded;
+    std::sort_heap(w.contacts.begin(), w.contacts.begin() + w.held, by_key);
+    w.merged = 0;
+  }
+  std::uint64_t kept = 0;
+  while (scratch.contact_count < scratch.contacts.size()) {
+    Scratch::NarrowWorkspace* next = nullptr;
+    for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces)
+      if (w.merged < w.held && (!next || w.contacts[w.merged].key < next->contacts[next->merged].key)) next = &w;
+    if (!next) break;
+    scratch.contacts[scratch.contact_count++] = next->contacts[next->merged++].contact;
+    ++kept;
+  }
+  scratch.contacts_dropped += static_cast<std::uint32_t>(found - kept);
+  return true;
+}
+
 }  // namespace
 
 template <bool kFriction>
@@ -443,26 +603,15 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
   } else {
     std::fill(scratch.pair_hit.begin(), scratch.pair_hit.begin() + pairs, std::uint8_t{1});
   }
-  Index retested = 0;
   // Response, in pair order: Algorithm 1, each pair tested as the earlier responses left it
   // (a response moves nodes, and with them the boxes around). A pair whose boxes no response
   // has moved since the detection is as the detection found it: without a hit there, it has
   // none now either, and is passed over. So the result is Algorithm 1's in this order.
   std::fill(scratch.box_moved.begin(), scratch.box_moved.begin() + boxes.size(), std::uint8_t{0});
-  for (Index p = 0; p < pairs; ++p) {
-    const Index b1 = scratch.pairs[p].a, b2 = scratch.pairs[p].b;
-    const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
-    if (state.asleep[object_1] && state.asleep[object_2]) continue;  // two sleepers never meet
-    if (sleeping(model)) meet(state, object_1, object_2);  // a moving object wakes a sleeper it meets
-    const bool same_object = object_1 == object_2;
-    if (same_object) ++counters.self_pairs_tested;
-    else ++counters.inter_pairs_tested;
-    if (!scratch.pair_hit[p] && !scratch.box_moved[b1] && !scratch.box_moved[b2]) continue;
-    ++retested;
-    ensure_box(model, boxes, state, scratch, b1, counters);
-    ensure_box(model, boxes, state, scratch, b2, counters);
-    test_nodes<kFriction>(model, level, state, scratch, b1, b2, same_object, counters, max_depth);
-    test_nodes<kFriction>(model, level, state, scratch, b2, b1, same_object, counters, max_depth);
+  Index retested = 0;
+  if (!answer_in_waves<kFriction>(model, level, state, scratch, counters, max_depth, retested)) {
+    PairSink sink{counters, max_depth, retested, scratch};
+    for (Index p = 0; p < pairs; ++p) answer_pair<kFriction>(model, level, state, scratch, p, sink);
   }
   if (detecting || pairs == 0) scratch.narrow_retested_share = pairs ? static_cast<double>(retested) / pairs : 0.0;
   else scratch.narrow_retested_share *= 0.9;  // try the detection again now and then

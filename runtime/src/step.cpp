@@ -59,6 +59,15 @@ void make_workspace(const Model& model, Scratch::PairWorkspace& w) {
   w.pairs.resize(8 * boxes + 64);
 }
 
+// Room to answer every pair in waves (with a pool only: one thread answers them in order).
+void size_waves(Scratch& scratch) {
+  if (!scratch.pool || scratch.pool->threads() < 2) return;
+  scratch.pair_wave.resize(scratch.pairs.size());
+  scratch.pair_turn.resize(scratch.pairs.size());
+  scratch.wave_pairs.resize(scratch.pairs.size());
+  scratch.wave_begin.resize(scratch.pairs.size() + 1);
+}
+
 }  // namespace
 
 Scratch make_scratch(const Model& model) {
@@ -84,6 +93,9 @@ Scratch make_scratch(const Model& model) {
     s.pair_hit.resize(s.pairs.size());
     s.pair_keys.resize(s.pairs.size());
     s.pair_sorted_keys.resize(s.pairs.size());
+    s.object_wave.resize(model.objects.size());
+    s.object_turn.resize(model.objects.size());
+    s.object_answered.resize(model.objects.size());
   }
   s.x_prev.resize(model.node_count());
   s.lambda.resize(model.springs.size());
@@ -140,6 +152,9 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
     scratch.pair_workspaces.back().grid_entries.resize(scratch.pair_workspaces[0].grid_entries.size());
     scratch.pair_workspaces.back().pairs.resize(scratch.pair_workspaces[0].pairs.size());
   }
+  scratch.narrow_workspaces.resize(threads);
+  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) w.contacts.resize(scratch.contacts.size());
+  size_waves(scratch);
 }
 
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) {
@@ -160,6 +175,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
   scratch.pair_hit.resize(scratch.pairs.size());
   scratch.pair_keys.resize(scratch.pairs.size());
   scratch.pair_sorted_keys.resize(scratch.pairs.size());
+  size_waves(scratch);
 }
 
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch) {

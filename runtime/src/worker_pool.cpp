@@ -31,15 +31,15 @@ constexpr std::int64_t kStepNapNs = 100'000;
 // more threads than cores (8 threads on 2 cores, the determinism tests) still make progress.
 constexpr int kSpinsBeforeYield = 2048;
 
-void spin(int& spins) {
+}  // namespace
+
+void spin_wait(int& spins) {
   relax();
   if (++spins == kSpinsBeforeYield) {
     spins = 0;
     std::this_thread::yield();
   }
 }
-
-}  // namespace
 
 int default_thread_count() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
 
@@ -100,7 +100,7 @@ void WorkerPool::run(std::uint32_t chunks, ChunkFn fn, void* context) {
   while (claim_and_run(job, 0)) {
   }
   int spins = 0;
-  while (done_.load(std::memory_order_acquire) != chunks) spin(spins);
+  while (done_.load(std::memory_order_acquire) != chunks) spin_wait(spins);
 }
 
 void WorkerPool::work(std::uint32_t thread) {
@@ -133,7 +133,7 @@ void WorkerPool::work(std::uint32_t thread) {
       // physics thread's real-time priority does not hold a core the viewer's renderer needs.
       // A part that starts while it naps is taken by the stepping thread; no one wakes it.
       if (now - idle_since < kStepSpinNs) {
-        spin(spins);
+        spin_wait(spins);
         continue;
       }
       sleep_until_ns(now + kStepNapNs);
@@ -147,7 +147,7 @@ void WorkerPool::work(std::uint32_t thread) {
       continue;
     }
     if (now - idle_since < kIdleSpinNs) {
-      spin(spins);
+      spin_wait(spins);
       continue;
     }
     sleep_until_ns(now + kNapNs);

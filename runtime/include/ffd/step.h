@@ -101,6 +101,16 @@ struct Scratch {
   // node of one box inside the other.
   std::vector<BoxPair> pairs;       // [0, pair_count) used; capacity grown between steps
   std::vector<std::uint8_t> pair_hit;
+  // Answering the pairs over the pool (collision.cpp): each pair's wave (one more than the
+  // last wave of a pair sharing an object with it) and its turn among each of its two
+  // objects' pairs, the pairs by wave (wave_pairs[wave_begin[w] .. wave_begin[w + 1])), and
+  // per object the next wave, the next turn to hand out, and the turns answered so far.
+  std::vector<std::uint32_t> pair_wave;
+  std::vector<std::array<std::uint32_t, 2>> pair_turn;
+  std::vector<Index> wave_pairs;
+  std::vector<Index> wave_begin;
+  std::vector<std::uint32_t> object_wave, object_turn, object_answered;
+  std::uint32_t narrow_waves = 0;  // waves of the last narrow phase (0: one thread answered the pairs)
   // Sorting the pairs into the order they are answered in (broad_phase.cpp).
   struct PairKey {
     std::uint64_t key;
@@ -153,6 +163,24 @@ struct Scratch {
     if (contact_count < contacts.size()) contacts[contact_count++] = {point, normal, depth, kind};
     else ++contacts_dropped;
   }
+  // A thread's share of the narrow phase's answers while pairs are answered in waves: its
+  // counters, and the contacts it found with the smallest keys (pair index, then order within
+  // the pair), at most contacts.size() of them in a max-heap on the key. The step's list is
+  // merged from them in key order: the same list, whichever thread answered which pair.
+  struct KeyedContact {
+    std::uint64_t key;
+    Contact contact;
+  };
+  struct NarrowWorkspace {
+    StageCounters counters;
+    double max_depth = 0.0;
+    Index retested = 0;
+    std::vector<KeyedContact> contacts;
+    std::uint32_t held = 0;      // contacts[0 .. held) used
+    std::uint32_t recorded = 0;  // contacts found, held or not
+    std::uint32_t merged = 0;    // contacts[0 .. merged) are in the step's list
+  };
+  std::vector<NarrowWorkspace> narrow_workspaces;  // one per thread (attach_pool())
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;

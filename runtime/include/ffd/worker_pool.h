@@ -83,6 +83,10 @@ class WorkerPool {
   std::vector<std::thread> workers_;
 };
 
+// One step of a spin-wait inside a step: a PAUSE, and after every few thousand a yield of
+// the core, so that more threads than cores (8 threads on 2 cores, the tests) still progress.
+void spin_wait(int& spins);
+
 // Threads a tool uses when the user does not say: two where the machine has two cores or
 // more (the product's target is a 2-core machine), else one.
 int default_thread_count();
