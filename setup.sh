@@ -6,6 +6,8 @@ cd "$(dirname "$0")"
 packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplusplus-dev libassimp-dev
           libcli11-dev nlohmann-json3-dev catch2 libbenchmark-dev libconcurrentqueue-dev
           libreaderwriterqueue-dev
+          # content hashes of the files a recording names
+          libxxhash-dev
           # SIMD kernels: Highway (run-time dispatch over the x86 targets)
           libhwy-dev
           # letter meshes: glyph outlines through FreeType (below), their caps triangulated by

@@ -263,6 +263,9 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   drain();
 
   result.final_hash = state_hash(loop.state());
+  // A check at the last step off the hash interval (a recording ends on its last step's hash).
+  if (result.hashes.empty() || result.hashes.back().first != loop.state().step)
+    result.hashes.emplace_back(loop.state().step, result.final_hash);
   const LoopCounters counters = loop.counters();
   result.commands_rejected = counters.commands_rejected;
   result.latency.steps = result.steps;

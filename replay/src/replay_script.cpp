@@ -14,7 +14,9 @@ namespace {
 
 const std::vector<std::string_view> kRootKeys = {"format", "version", "description", "scene", "steps",
                                                  "duration_ms", "event", "probe_path", "drag_path",
-                                                 "assert", "record"};
+                                                 "assert", "record", "recorded"};
+const std::vector<std::string_view> kRecordedKeys = {"ffdsim", "scene", "scene_hash", "scene_text", "meshes"};
+const std::vector<std::string_view> kRecordedFileKeys = {"path", "hash"};
 const std::vector<std::string_view> kEventKeys = {"at_step", "at_ms", "probe", "grab", "drag", "release",
                                                   "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "accuracy", "auto_accuracy", "budget_us",
                                                   "pause_ms", "resume", "single_step", "reset"};
@@ -50,8 +52,9 @@ std::string location(const std::string& origin, const toml::source_region& where
 
 class ScriptReader {
  public:
-  ScriptReader(const std::string& origin, const std::string& base_dir, const SceneLimits& limits)
-      : origin_(origin), base_dir_(base_dir), limits_(limits) {}
+  ScriptReader(const std::string& origin, const std::string& base_dir, const SceneLimits& limits,
+               RecordedScene recorded_scene)
+      : origin_(origin), base_dir_(base_dir), limits_(limits), recorded_scene_(recorded_scene) {}
 
   LoadedReplay read(const toml::table& root_table) {
     const TableReader root(origin_, root_table, "", kRootKeys);
@@ -67,7 +70,19 @@ class ScriptReader {
                                   std::to_string(kReplayFormatVersion));
     script.description = root.string("description").value_or("");
 
-    read_scene(root, script);
+    read_recorded(root, script);
+    if (script.recorded && recorded_scene_ == RecordedScene::FromRecording) {
+      const std::filesystem::path scene_file = resolve(script.recorded->scene.path);
+      script.scene_origin = origin_ + " [recorded].scene_text";
+      try {
+        script.scene = parse_scene(script.recorded->scene_text, script.scene_origin, scene_file.parent_path().string(), limits_);
+      } catch (const InputError& e) {
+        root.fail_at("recorded", std::string("the recorded scene text does not load: ") + e.what());
+      }
+    } else {
+      read_scene(root, script);
+    }
+    if (script.recorded) check_recorded_files(root, script);
     std::vector<std::string> log;
     try {
       out.model = compile(script.scene, log);
@@ -80,6 +95,7 @@ class ScriptReader {
     if (root.has("steps") && root.has("duration_ms")) root.fail_at("duration_ms", "give either 'steps' or 'duration_ms', not both");
     if (root.has("steps")) script.steps = static_cast<std::uint64_t>(root.integer("steps", 0, 1, kMaxSteps));
     else if (root.has("duration_ms")) script.steps = ms_to_steps(root, "duration_ms", Bounds{0.0, kInf, true, false});
+    else if (root.subtable("record")) script.steps = last_recorded_step(root);  // a recording written as it ran
     else root.fail_missing("steps", " (give 'steps' or 'duration_ms': how long the replay runs)");
     if (script.steps == 0) root.fail_at("duration_ms", "is shorter than one step");
     steps_ = script.steps;
@@ -120,6 +136,77 @@ class ScriptReader {
                                 " (scene paths are relative to the script's folder)");
     script.scene_origin = resolved.string();
     script.scene = load_scene_file(resolved.string(), limits_);
+  }
+
+  std::filesystem::path resolve(const std::string& path) const {
+    std::filesystem::path resolved(path);
+    if (resolved.is_relative() && !base_dir_.empty()) resolved = std::filesystem::path(base_dir_) / resolved;
+    return resolved.lexically_normal();
+  }
+
+  // A recording's [recorded] table: the ffdsim that wrote it and its files' content hashes.
+  void read_recorded(const TableReader& root, ReplayScript& script) {
+    const toml::table* table = root.subtable("recorded");
+    if (!table) return;
+    const TableReader r(origin_, *table, "recorded", kRecordedKeys);
+    RecordedOrigin o;
+    auto required = [&](const TableReader& t, std::string_view key) {
+      const auto value = t.string(key);
+      if (!value) t.fail_missing(key);
+      return *value;
+    };
+    o.ffdsim = required(r, "ffdsim");
+    o.scene.path = required(r, "scene");
+    o.scene.hash = required(r, "scene_hash");
+    o.scene_text = required(r, "scene_text");
+    const auto meshes = array_of_tables(r, "meshes");
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+      const TableReader m(origin_, *meshes[i], "recorded.meshes[" + std::to_string(i) + "]", kRecordedFileKeys);
+      o.meshes.push_back({required(m, "path"), required(m, "hash")});
+    }
+    script.recorded = std::move(o);
+  }
+
+  // The scene and mesh files as they are now against their recorded content hashes.
+  void check_recorded_files(const TableReader& root, ReplayScript& script) {
+    const RecordedOrigin& o = *script.recorded;
+    std::vector<RecordedFile> files;
+    if (recorded_scene_ != RecordedScene::FromRecording) files.push_back(o.scene);
+    files.insert(files.end(), o.meshes.begin(), o.meshes.end());
+    for (const RecordedFile& f : files) {
+      const std::string path = resolve(f.path).string();
+      std::string now;
+      try {
+        now = content_hash_of_file(path);
+      } catch (const InputError& e) {
+        now = "unreadable";
+      }
+      if (now == f.hash) continue;
+      const std::string what = path + " has changed since it was recorded (recorded " + f.hash + ", now " + now + ")";
+      if (recorded_scene_ == RecordedScene::AllowChanged) {
+        script.warnings.push_back(origin_ + ": " + what + "; replaying it as it is now (--allow-changed)");
+        continue;
+      }
+      root.fail_at("recorded", what + ": replay the recorded scene with --scene-from-recording, or the files as they "
+                                      "are now with --allow-changed");
+    }
+  }
+
+  // A recording written as the session ran has no 'steps' (its header went to disk first): it
+  // runs to its last state hash or event, whichever is later.
+  std::uint64_t last_recorded_step(const TableReader& root) const {
+    std::uint64_t last = 0;
+    for (const toml::table* event : array_of_tables(root, "event"))
+      if (const auto step = (*event)["at_step"].value<std::int64_t>(); step && *step > 0)
+        last = std::max(last, static_cast<std::uint64_t>(*step));
+    if (const toml::table* assertions = root.subtable("assert"))
+      if (const toml::array* hashes = (*assertions)["hash"].as_array())
+        for (const toml::node& h : *hashes)
+          if (const toml::table* t = h.as_table())
+            if (const auto step = (*t)["step"].value<std::int64_t>(); step && *step > 0)
+              last = std::max(last, static_cast<std::uint64_t>(*step));
+    if (last == 0) root.fail_missing("steps", " (a recording with no state hash or event yet: nothing to replay)");
+    return last;
   }
 
   // A time given as "<prefix>_step" or "<prefix>_ms" (exactly one), in steps.
@@ -516,6 +603,7 @@ class ScriptReader {
   const std::string& origin_;
   const std::string& base_dir_;
   const SceneLimits& limits_;
+  RecordedScene recorded_scene_;
   const Model* model_ = nullptr;
   std::uint64_t path_commands_ = 0;  // commands from the keyframed paths so far
   double dt_ms_ = 1.0;
@@ -525,13 +613,26 @@ class ScriptReader {
 }  // namespace
 
 LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
-                          const SceneLimits& limits) {
-  return ScriptReader(origin, base_dir, limits).read(parse_toml(text, origin));
+                          const SceneLimits& limits, RecordedScene recorded_scene) {
+  // A recording written as the session ran ends each block with a blank line; a run killed
+  // mid-write leaves a last block cut short, which is left out with a note.
+  if (text.rfind(kStreamedRecordingMarker, 0) == 0 && !text.ends_with("\n\n")) {
+    const std::size_t end = text.rfind("\n\n");
+    const std::string kept = end == std::string::npos ? std::string() : text.substr(0, end + 2);
+    const auto line_of = [&](std::size_t offset) { return std::count(text.begin(), text.begin() + offset, '\n') + 1; };
+    LoadedReplay out = ScriptReader(origin, base_dir, limits, recorded_scene).read(parse_toml(kept, origin));
+    out.script.warnings.push_back(origin + ":" + std::to_string(line_of(kept.size())) +
+                                  ": the recording ends mid-write here (the run was cut off); replaying its " +
+                                  std::to_string(out.script.steps) + " steps up to line " +
+                                  std::to_string(line_of(kept.size()) - 1));
+    return out;
+  }
+  return ScriptReader(origin, base_dir, limits, recorded_scene).read(parse_toml(text, origin));
 }
 
-LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits) {
+LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits, RecordedScene recorded_scene) {
   return parse_replay(read_text_file(path, "replay script"), path, std::filesystem::path(path).parent_path().string(),
-                      limits);
+                      limits, recorded_scene);
 }
 
 }  // namespace ffd

@@ -1,5 +1,8 @@
 #include "app/session.h"
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include "ffd/scene_loader.h"
@@ -13,27 +16,76 @@ Session::Session(const std::string& scene_path, const SessionOptions& options)
   initial_ = initial_state(*model_);
   if (options_.loop.hash_every == 0) options_.loop.hash_every = 100;
   log_.scene_path = scene_path_;
+  if (!options_.record_path.empty()) {
+    // A hash at least once a simulated second, so that a cut-off recording still compares.
+    const auto second = static_cast<std::uint32_t>(std::max(1.0, std::round(1.0 / model_->settings.dt)));
+    options_.loop.hash_every = std::min(options_.loop.hash_every, second);
+    recording_ = std::make_unique<RecordingStream>(options_.record_path, *model_, scene_path_, spec, options_.loop.hash_every);
+  }
   log_.hash_every = options_.loop.hash_every;
   loop_ = std::make_unique<PhysicsLoop>(*model_, initial_, options_.loop);
   compute_ns_.reserve(1 << 20);
   lateness_ns_.reserve(1 << 20);
   loop_->start();
+  drain_thread_ = std::thread([this] {
+    while (!drain_stop_.load(std::memory_order_acquire)) {
+      drain();
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
 }
 
 Session::~Session() { stop(); }
 
 void Session::stop() {
-  if (!loop_) return;
+  if (!loop_ || !drain_thread_.joinable()) return;
   loop_->request_stop();
   loop_->join();
+  drain_stop_.store(true, std::memory_order_release);
+  drain_thread_.join();
+  drain();
+  if (recording_ && recording_error_.empty()) {
+    // The last step's hash, whatever the interval: a replay then compares up to the end.
+    const State& last = loop_->state();
+    try {
+      if (last.step > 0) recording_->hash(last.step, state_hash(last));
+      recording_->flush();
+    } catch (const std::exception& e) {
+      recording_error_ = e.what();
+    }
+  }
   poll();
+}
+
+void Session::drain() {
+  std::lock_guard<std::mutex> lock(staging_mutex_);
+  const std::size_t first_telemetry = staged_telemetry_.size(), first_command = staged_commands_.size();
+  // Telemetry first: a command is queued before the telemetry of the step it was applied at,
+  // so every command up to the newest hash drained here is drained below too.
+  Telemetry t;
+  while (loop_->pop_telemetry(t)) staged_telemetry_.push_back(t);
+  Command c;
+  while (loop_->pop_applied_command(c)) staged_commands_.push_back(c);
+  if (!recording_ || !recording_error_.empty()) return;
+  try {
+    for (std::size_t i = first_command; i < staged_commands_.size(); ++i) recording_->command(staged_commands_[i]);
+    for (std::size_t i = first_telemetry; i < staged_telemetry_.size(); ++i)
+      if (staged_telemetry_[i].has_hash) recording_->hash(staged_telemetry_[i].step, staged_telemetry_[i].state_hash);
+    recording_->flush();
+  } catch (const std::exception& e) {
+    recording_error_ = e.what();  // reported at the end; the session goes on
+  }
 }
 
 void Session::poll() {
   if (const Frame* f = loop_->latest_frame()) frame_ = f;
-  Telemetry t;
+  {
+    std::lock_guard<std::mutex> lock(staging_mutex_);
+    taken_telemetry_.swap(staged_telemetry_);
+    taken_commands_.swap(staged_commands_);
+  }
   constexpr double kAverageWeight = 1.0 / 200.0;  // moving average over about 200 steps
-  while (loop_->pop_telemetry(t)) {
+  for (const Telemetry& t : taken_telemetry_) {
     history_.compute_us[history_.next] = static_cast<float>(t.compute_ns) * 1e-3f;
     history_.lateness_us[history_.next] = static_cast<float>(t.lateness_ns) * 1e-3f;
     history_.next = (history_.next + 1) % LatencyHistory::kLength;
@@ -53,8 +105,9 @@ void Session::poll() {
     log_.steps = t.step;
     if (t.has_hash) log_.hashes.emplace_back(t.step, t.state_hash);
   }
-  Command c;
-  while (loop_->pop_applied_command(c)) log_.commands.push_back(c);
+  log_.commands.insert(log_.commands.end(), taken_commands_.begin(), taken_commands_.end());
+  taken_telemetry_.clear();
+  taken_commands_.clear();
 }
 
 std::uint64_t Session::send(Command command) {

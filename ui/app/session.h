@@ -1,12 +1,17 @@
 #pragma once
 // A scene running on the real-time physics loop, as the UI thread sees it: the newest frame,
 // the latency history for the plots, and the log of every applied command (what a
-// recording writes). Everything here runs on the UI thread; the physics thread is only
-// reached through the loop's queues.
+// recording writes). The public interface is for the UI thread. A drain thread empties the
+// loop's lossless queues every 10 ms (whatever the UI's frame rate) into a staging area
+// that poll() takes over, and writes the recording as it goes; the physics thread is only
+// reached through the loop's queues and never waits on either.
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "ffd/physics_loop.h"
@@ -20,6 +25,9 @@ struct SessionOptions {
   // frame, so that it lands on a known step (3 ms later: under one display frame). One that
   // arrives after its step has run is applied at once and counted late by the loop.
   std::uint64_t command_lead_steps = 3;
+  // Record to this file as the session runs (recording.h): written from the session's drain
+  // thread every 10 ms, so a killed run loses at most the last few tens of milliseconds.
+  std::string record_path;
 };
 
 // The last steps' loop figures, for the latency panel.
@@ -70,6 +78,10 @@ class Session {
   const std::vector<std::int64_t>& lateness_ns() const { return lateness_ns_; }
 
   void stop();  // ends the physics thread (also done by the destructor)
+  // The recording written as the session runs (nullptr without SessionOptions::record_path),
+  // and the first error writing it (empty: none). Read after stop().
+  const RecordingStream* recording() const { return recording_.get(); }
+  const std::string& recording_error() const { return recording_error_; }
 
  private:
   std::string scene_path_;
@@ -82,6 +94,15 @@ class Session {
   LatencyHistory history_;
   Recording log_;
   std::vector<std::int64_t> compute_ns_, lateness_ns_;
+  // Drain thread (see above): what it took from the queues since the last poll().
+  void drain();
+  std::mutex staging_mutex_;
+  std::vector<Telemetry> staged_telemetry_, taken_telemetry_;
+  std::vector<Command> staged_commands_, taken_commands_;
+  std::unique_ptr<RecordingStream> recording_;
+  std::string recording_error_;
+  std::atomic<bool> drain_stop_{false};
+  std::thread drain_thread_;
 };
 
 }  // namespace ffd::ui

@@ -43,6 +43,8 @@ struct ReplayOptions {
   bool skip_latency = false;
   int threads = 0;
   bool quiet = false;
+  bool scene_from_recording = false;  // a recording: its embedded scene text, not the scene file
+  bool allow_changed = false;         // a recording: the files as they are now, even if changed
 };
 void register_replay(CLI::App& app, ReplayOptions& options);
 int run_replay_command(const ReplayOptions& options);

@@ -20,6 +20,13 @@ void register_replay(CLI::App& app, ReplayOptions& o) {
   cmd->add_option("--budget-us", o.budget_us, "Latency budget per step, microseconds")->check(CLI::Range(1.0, 1e7));
   cmd->add_flag("--skip-latency", o.skip_latency,
                 "Report latency limits as SKIP (for sanitizer and debug builds, whose steps are far slower)");
+  CLI::Option* from_recording = cmd->add_flag(
+      "--scene-from-recording", o.scene_from_recording,
+      "A recording: replay the scene text it holds, not the scene file as it is now (meshes still from their files)");
+  cmd->add_flag("--allow-changed", o.allow_changed,
+                "A recording: replay the scene and mesh files as they are now even where their content changed since "
+                "(the replay reports the first diverging step)")
+      ->excludes(from_recording);
   add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only failures and errors");
 }
@@ -27,12 +34,16 @@ void register_replay(CLI::App& app, ReplayOptions& o) {
 int run_replay_command(const ReplayOptions& o) {
   ffd::LoadedReplay replay;
   try {
-    replay = ffd::load_replay_file(o.script);
+    const ffd::RecordedScene recorded = o.scene_from_recording ? ffd::RecordedScene::FromRecording
+                                        : o.allow_changed      ? ffd::RecordedScene::AllowChanged
+                                                               : ffd::RecordedScene::MustMatch;
+    replay = ffd::load_replay_file(o.script, {}, recorded);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
   }
+  for (const std::string& warning : replay.script.warnings) std::fprintf(stderr, "ffdsim: warning: %s\n", warning.c_str());
   ffd::ReplayRunOptions run;
   run.pacing = o.fast ? ffd::Pacing::Fast : ffd::Pacing::RealTime;
   run.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);
@@ -42,6 +53,9 @@ int run_replay_command(const ReplayOptions& o) {
   const ffd::ReplayResult result = ffd::run_replay(replay, run);
   const std::string text = ffd::format_replay_result(replay.script, result);
   if (!o.quiet || !result.passed()) std::fputs(text.c_str(), result.passed() ? stdout : stderr);
+  if (!result.passed() && replay.script.recorded && replay.script.recorded->ffdsim != ffd::ffdsim_version())
+    std::fprintf(stderr, "ffdsim: %s: recorded with ffdsim %s; this is ffdsim %s, whose state hashes may differ\n",
+                 o.script.c_str(), replay.script.recorded->ffdsim.c_str(), ffd::ffdsim_version().c_str());
   if (!o.report_path.empty()) {
     std::ofstream out(o.report_path);
     out << ffd::replay_result_json(replay.script, result);

@@ -52,6 +52,11 @@ struct RunFigures {
   std::array<std::uint64_t, ffd::kAccuracyLevels> steps_at_level{};
   bool finite = true;
   ffd::Recording log;
+  // --record in the loop-only mode: the file was written as the run went (else it is
+  // written from `log` at the end). Its figures and the first write error.
+  bool recorded_as_it_ran = false;
+  std::size_t recorded_commands = 0, recorded_hashes = 0;
+  std::string recording_error;
   nlohmann::json ui;  // UI figures, when a viewer ran
 };
 
@@ -111,7 +116,15 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
       status = kExitBadInput;
     }
   }
-  if (!o.record_path.empty()) {
+  if (!o.record_path.empty() && f.recorded_as_it_ran) {
+    if (!f.recording_error.empty()) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", f.recording_error.c_str());
+      status = kExitBadInput;
+    } else if (!o.quiet) {
+      std::printf("recorded %zu commands and %zu state hashes to %s (written as the run went)\n", f.recorded_commands,
+                  f.recorded_hashes, o.record_path.c_str());
+    }
+  } else if (!o.record_path.empty()) {
     try {
       ffd::write_recording(o.record_path, model, f.log);
       if (!o.quiet)
@@ -148,6 +161,7 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   ffd::ui::SessionOptions options;
   options.loop = loop_options(o);
   options.loop.frame_boxes = false;  // nobody draws them
+  options.record_path = o.record_path;
   ffd::ui::Session session(scene_path, options);
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
   while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
@@ -164,6 +178,12 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   f.finite = session.history().finite;
   f.steps_at_level = session.history().steps_at_level;
   f.log = session.log();
+  if (const ffd::RecordingStream* r = session.recording()) {
+    f.recorded_as_it_ran = true;
+    f.recorded_commands = r->commands();
+    f.recorded_hashes = r->hashes();
+    f.recording_error = session.recording_error();
+  }
   return f;
 }
 
@@ -239,7 +259,12 @@ int run_run(const RunOptions& given) {
   RunFigures figures;
   int status = kExitOk;
   if (!viewer) {
-    figures = run_loop_only(o, scene_path);
+    try {
+      figures = run_loop_only(o, scene_path);
+    } catch (const std::exception& e) {  // the recording cannot be created
+      std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+      return kExitBadInput;
+    }
   } else {
     ffd::ui::UiRunOptions u;
     u.viewer.scene_path = scene_path;

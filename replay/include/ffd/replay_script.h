@@ -96,6 +96,33 @@ struct HashCheck {
   std::uint64_t value = 0;  // state_hash
 };
 
+// Where a recording came from (its [recorded] table, recording.h): the ffdsim that wrote it
+// and the files it ran, by content hash ("xxh3:" and 16 hex digits), paths as stored
+// (relative to the recording's folder).
+struct RecordedFile {
+  std::string path;
+  std::string hash;
+};
+struct RecordedOrigin {
+  std::string ffdsim;      // version
+  RecordedFile scene;
+  std::string scene_text;  // the scene file as it was
+  std::vector<RecordedFile> meshes;
+};
+
+// How a recording is read against the files it names.
+enum class RecordedScene {
+  MustMatch,      // a scene or mesh file whose content changed is an error, before any step
+  FromRecording,  // the scene text embedded in the recording (meshes still from their files)
+  AllowChanged,   // the files as they are now, each difference a warning
+};
+
+// "xxh3:" and the 16 hex digits of XXH3-64 over the file's bytes. Throws InputError naming
+// the file when it cannot be read.
+std::string content_hash_of_file(const std::string& path);
+// This build's version (the top-level CMakeLists.txt).
+std::string ffdsim_version();
+
 struct ReplayScript {
   std::string path;         // the script file
   std::string scene_origin; // the scene file, or "<script>[scene]" when inline
@@ -112,7 +139,14 @@ struct ReplayScript {
   RestLimit rest;
   ForceLimits force;
   std::vector<HashCheck> hashes;     // ordered by step
+  std::optional<RecordedOrigin> recorded;  // a recording's origin (none: a hand-written script)
+  // What the reader let pass with a note (a recording cut off mid-write), file:line: text.
+  std::vector<std::string> warnings;
 };
+
+// The first line of a recording written as the session runs (recording.h): such a file may
+// end mid-write, and is read up to its last complete block.
+inline constexpr const char* kStreamedRecordingMarker = "# ffdsim recording, written as the session runs";
 
 struct LoadedReplay {
   ReplayScript script;
@@ -123,8 +157,9 @@ struct LoadedReplay {
 // Throws ReplayError (file:line:col: field: problem) for anything wrong, including a scene
 // that does not load or compile.
 // `limits` applies to the script's scene.
-LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits = {});
+LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits = {},
+                              RecordedScene recorded_scene = RecordedScene::MustMatch);
 LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
-                          const SceneLimits& limits = {});
+                          const SceneLimits& limits = {}, RecordedScene recorded_scene = RecordedScene::MustMatch);
 
 }  // namespace ffd
