@@ -155,6 +155,9 @@ RecordingStream::RecordingStream(const std::string& path, const Model& model, co
 }
 
 std::string content_hash_of_file(const std::string& path) {
+  std::error_code error;
+  // Not a device or a pipe: those could be endless.
+  if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": not a regular file");
   const std::string bytes = read_text_file(path, "file");
   char digits[24];
   std::snprintf(digits, sizeof digits, "xxh3:%016llx",

@@ -620,6 +620,10 @@ LoadedReplay parse_replay(const std::string& text, const std::string& origin, co
     const std::size_t end = text.rfind("\n\n");
     const std::string kept = end == std::string::npos ? std::string() : text.substr(0, end + 2);
     const auto line_of = [&](std::size_t offset) { return std::count(text.begin(), text.begin() + offset, '\n') + 1; };
+    if (kept.find("\n[record]\n") == std::string::npos)
+      throw ReplayError(origin + ":" + std::to_string(line_of(text.size())) +
+                        ": the recording ends mid-write within its header (the run was cut off as it started): "
+                        "nothing to replay");
     LoadedReplay out = ScriptReader(origin, base_dir, limits, recorded_scene).read(parse_toml(kept, origin));
     out.script.warnings.push_back(origin + ":" + std::to_string(line_of(kept.size())) +
                                   ": the recording ends mid-write here (the run was cut off); replaying its " +

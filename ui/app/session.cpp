@@ -17,9 +17,10 @@ Session::Session(const std::string& scene_path, const SessionOptions& options)
   if (options_.loop.hash_every == 0) options_.loop.hash_every = 100;
   log_.scene_path = scene_path_;
   if (!options_.record_path.empty()) {
-    // A hash at least once a simulated second, so that a cut-off recording still compares.
-    const auto second = static_cast<std::uint32_t>(std::max(1.0, std::round(1.0 / model_->settings.dt)));
-    options_.loop.hash_every = std::min(options_.loop.hash_every, second);
+    // A hash at least every 50 ms of simulated time: a recording cut off at any moment then
+    // compares up to within about 60 ms of where the run was (hashes, drain, flush).
+    const auto most = static_cast<std::uint32_t>(std::max(1.0, std::round(0.05 / model_->settings.dt)));
+    options_.loop.hash_every = std::min(options_.loop.hash_every, most);
     recording_ = std::make_unique<RecordingStream>(options_.record_path, *model_, scene_path_, spec, options_.loop.hash_every);
   }
   log_.hash_every = options_.loop.hash_every;

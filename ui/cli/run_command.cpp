@@ -60,6 +60,48 @@ struct RunFigures {
   nlohmann::json ui;  // UI figures, when a viewer ran
 };
 
+// The run report (--report) as JSON.
+nlohmann::json report_json(const RunOptions& o, const RunFigures& f, bool interrupted, bool running) {
+  const std::size_t steps = f.compute_ns.size();
+  const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
+  const ffd::TimeSummary lateness = ffd::summarize_times(f.lateness_ns);
+  nlohmann::json j = {{"scene", f.scene_path},
+                      {"mode", f.mode},
+                      {"steps", steps},
+                      {"period_us", o.period_us},
+                      {"budget_us", o.budget_us},
+                      {"interrupted", interrupted},
+                      {"finite", f.finite},
+                      {"compute", time_summary_json(compute)},
+                      {"lateness", time_summary_json(lateness)},
+                      {"deadline_misses", f.counters.deadline_misses},
+                      {"overruns", f.counters.overruns},
+                      {"commands_applied", f.log.commands.size()},
+                      {"commands_late", f.counters.commands_late},
+                      {"telemetry_dropped", f.counters.telemetry_dropped},
+                      {"accuracy_switches", f.counters.accuracy_switches},
+                      {"steps_at_accuracy_level", f.steps_at_level},
+                      {"sched_fifo", f.counters.realtime_priority},
+                      {"memory_locked", f.counters.memory_locked}};
+  if (!f.ui.is_null()) j["ui"] = f.ui;
+j["running"] = running;  // true: written while the run went on (it was cut off if it stays so)
+return j;
+}
+
+// Through a temporary file renamed over the report: a run killed at any moment leaves the
+// last complete report. False if it cannot be written.
+bool write_report_file(const std::string& path, const nlohmann::json& j) {
+  const std::string temporary = path + ".partial";
+  {
+    std::ofstream out(temporary, std::ios::trunc);
+    out << j.dump(2) << '\n';
+    if (!out) return false;
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  return !error;
+}
+
 int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
   const std::size_t steps = f.compute_ns.size();
   const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
@@ -89,32 +131,9 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
                   f.ui.value("renderer", "").c_str(), f.ui.value("frames", std::size_t{0}), f.ui.value("frame_mean_ms", 0.0),
                   f.ui.value("frame_max_ms", 0.0), f.log.commands.size());
   }
-  if (!o.report_path.empty()) {
-    nlohmann::json j = {{"scene", f.scene_path},
-                        {"mode", f.mode},
-                        {"steps", steps},
-                        {"period_us", o.period_us},
-                        {"budget_us", o.budget_us},
-                        {"interrupted", interrupted},
-                        {"finite", f.finite},
-                        {"compute", time_summary_json(compute)},
-                        {"lateness", time_summary_json(lateness)},
-                        {"deadline_misses", f.counters.deadline_misses},
-                        {"overruns", f.counters.overruns},
-                        {"commands_applied", f.log.commands.size()},
-                        {"commands_late", f.counters.commands_late},
-                        {"telemetry_dropped", f.counters.telemetry_dropped},
-                        {"accuracy_switches", f.counters.accuracy_switches},
-                        {"steps_at_accuracy_level", f.steps_at_level},
-                        {"sched_fifo", f.counters.realtime_priority},
-                        {"memory_locked", f.counters.memory_locked}};
-    if (!f.ui.is_null()) j["ui"] = f.ui;
-    std::ofstream out(o.report_path);
-    out << j.dump(2) << '\n';
-    if (!out) {
-      std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
-      status = kExitBadInput;
-    }
+  if (!o.report_path.empty() && !write_report_file(o.report_path, report_json(o, f, interrupted, false))) {
+    std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
+    status = kExitBadInput;
   }
   if (!o.record_path.empty() && f.recorded_as_it_ran) {
     if (!f.recording_error.empty()) {
@@ -157,18 +176,7 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
 }
 
 // The physics loop alone (a Session without a viewer), its queues read at a 60 Hz display's pace.
-RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
-  ffd::ui::SessionOptions options;
-  options.loop = loop_options(o);
-  options.loop.frame_boxes = false;  // nobody draws them
-  options.record_path = o.record_path;
-  ffd::ui::Session session(scene_path, options);
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
-  while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
-    session.poll();
-    std::this_thread::sleep_for(std::chrono::milliseconds(16));
-  }
-  session.stop();
+RunFigures figures_of(const ffd::ui::Session& session, const std::string& scene_path) {
   RunFigures f;
   f.scene_path = scene_path;
   f.mode = "headless loop";
@@ -178,6 +186,29 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   f.finite = session.history().finite;
   f.steps_at_level = session.history().steps_at_level;
   f.log = session.log();
+  return f;
+}
+
+RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
+  ffd::ui::SessionOptions options;
+  options.loop = loop_options(o);
+  options.loop.frame_boxes = false;  // nobody draws them
+  options.record_path = o.record_path;
+  ffd::ui::Session session(scene_path, options);
+  const auto start = std::chrono::steady_clock::now();
+  const auto end = start + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
+  // The report at the start and then every second, so that a killed run leaves one.
+  auto next_report = start;
+  while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
+    session.poll();
+    if (!o.report_path.empty() && std::chrono::steady_clock::now() >= next_report) {
+      write_report_file(o.report_path, report_json(o, figures_of(session, scene_path), false, true));
+      next_report += std::chrono::seconds(1);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(16));
+  }
+  session.stop();
+  RunFigures f = figures_of(session, scene_path);
   if (const ffd::RecordingStream* r = session.recording()) {
     f.recorded_as_it_ran = true;
     f.recorded_commands = r->commands();
