@@ -167,3 +167,75 @@ TEST_CASE("a replay of a recording whose scene changed stops and names the scene
   CHECK(anyway.output.find("warning") != std::string::npos);
   CHECK(anyway.output.find("diverged: state hash at step") != std::string::npos);
 }
+
+TEST_CASE("the viewer's Record button writes the recording as the session runs, and it replays", "[cli][recording]") {
+  const fs::path dir = scene_folder("viewer");
+  const fs::path script = dir / "record.toml";
+  std::ofstream(script) << R"(format = "ffdsim-ui-script"
+version = 1
+scene = "scenes/two_teapots.toml"
+duration_ms = 2400
+
+[[input]]
+at_ms = 100
+widget = "record"
+
+[[input]]
+at_ms = 150
+press = "left"
+
+[[input]]
+at_ms = 160
+release = "left"
+
+# In the recorded session (it restarts at step 0): a grab and a drag, then stop and save.
+[[input]]
+at_ms = 700
+mouse_to = "teapot_high"
+
+[[input]]
+at_ms = 750
+press = "left"
+
+[[input]]
+at_ms = 800
+offset = [30, -20]
+glide_ms = 300
+
+[[input]]
+at_ms = 1200
+release = "left"
+
+[[input]]
+at_ms = 1500
+widget = "record"
+
+[[input]]
+at_ms = 1550
+press = "left"
+
+[[input]]
+at_ms = 1560
+release = "left"
+)";
+  const Result r = run_ffdsim("run --headless --input " + script.string() + " --frames " + (dir / "frames").string() +
+                              " -q");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  // The viewer writes to out/recordings/ under the working directory: find this run's file.
+  fs::path recording;
+  for (const fs::directory_entry& e : fs::directory_iterator("out/recordings"))
+    if (e.path().filename().string().rfind("session_", 0) == 0 &&
+        (recording.empty() || fs::last_write_time(e.path()) > fs::last_write_time(recording)))
+      recording = e.path();
+  REQUIRE(!recording.empty());
+  const std::string text = read_file(recording);
+  INFO(recording.string());
+  CHECK(text.rfind("# ffdsim recording, written as the session runs", 0) == 0);
+  CHECK(text.find("grab = {") != std::string::npos);
+  CHECK(last_hash_step(text) >= 1000);
+  const Result replay = run_ffdsim("replay " + recording.string() + " --fast");
+  INFO(replay.output);
+  CHECK(replay.exit_code == 0);
+  fs::remove(recording);
+}

@@ -16,11 +16,12 @@ Session::Session(const std::string& scene_path, const SessionOptions& options)
   initial_ = initial_state(*model_);
   if (options_.loop.hash_every == 0) options_.loop.hash_every = 100;
   log_.scene_path = scene_path_;
+  // A hash at least every 50 ms of simulated time, whatever --hash-every says: a recording
+  // (written as it goes or at the end) always compares, and one cut off at any moment does so
+  // up to within about 60 ms of where the run was (hashes, drain, flush).
+  const auto most = static_cast<std::uint32_t>(std::max(1.0, std::round(0.05 / model_->settings.dt)));
+  options_.loop.hash_every = std::min(options_.loop.hash_every, most);
   if (!options_.record_path.empty()) {
-    // A hash at least every 50 ms of simulated time: a recording cut off at any moment then
-    // compares up to within about 60 ms of where the run was (hashes, drain, flush).
-    const auto most = static_cast<std::uint32_t>(std::max(1.0, std::round(0.05 / model_->settings.dt)));
-    options_.loop.hash_every = std::min(options_.loop.hash_every, most);
     recording_ = std::make_unique<RecordingStream>(options_.record_path, *model_, scene_path_, spec, options_.loop.hash_every);
   }
   log_.hash_every = options_.loop.hash_every;
@@ -45,17 +46,26 @@ void Session::stop() {
   drain_stop_.store(true, std::memory_order_release);
   drain_thread_.join();
   drain();
-  if (recording_ && recording_error_.empty()) {
-    // The last step's hash, whatever the interval: a replay then compares up to the end.
-    const State& last = loop_->state();
+  // The last step's hash, whatever the interval: a replay then compares up to the end.
+  const State& last = loop_->state();
+  const std::uint64_t last_hash = state_hash(last);
+  if (recording_ && !recording_closed_ && recording_error_.empty()) {
     try {
-      if (last.step > 0) recording_->hash(last.step, state_hash(last));
+      if (last.step > 0) recording_->hash(last.step, last_hash);
       recording_->flush();
     } catch (const std::exception& e) {
       recording_error_ = e.what();
     }
   }
   poll();
+  if (last.step > 0 && (log_.hashes.empty() || log_.hashes.back().first != last.step))
+    log_.hashes.emplace_back(last.step, last_hash);
+}
+
+void Session::close_recording() {
+  drain();
+  std::lock_guard<std::mutex> lock(staging_mutex_);
+  recording_closed_ = true;
 }
 
 void Session::drain() {
@@ -67,7 +77,7 @@ void Session::drain() {
   while (loop_->pop_telemetry(t)) staged_telemetry_.push_back(t);
   Command c;
   while (loop_->pop_applied_command(c)) staged_commands_.push_back(c);
-  if (!recording_ || !recording_error_.empty()) return;
+  if (!recording_ || recording_closed_ || !recording_error_.empty()) return;
   try {
     for (std::size_t i = first_command; i < staged_commands_.size(); ++i) recording_->command(staged_commands_[i]);
     for (std::size_t i = first_telemetry; i < staged_telemetry_.size(); ++i)

@@ -81,6 +81,10 @@ class Session {
   // The recording written as the session runs (nullptr without SessionOptions::record_path),
   // and the first error writing it (empty: none). Read after stop().
   const RecordingStream* recording() const { return recording_.get(); }
+  // Ends the recording while the session goes on (the viewer's "Stop and save"): what was
+  // applied and hashed until now is written, nothing after. Its last hash is at most 50 ms
+  // of simulated time old; a replay runs to it or to the last command, whichever is later.
+  void close_recording();
   const std::string& recording_error() const { return recording_error_; }
 
  private:
@@ -101,6 +105,7 @@ class Session {
   std::vector<Command> staged_commands_, taken_commands_;
   std::unique_ptr<RecordingStream> recording_;
   std::string recording_error_;
+  bool recording_closed_ = false;
   std::atomic<bool> drain_stop_{false};
   std::thread drain_thread_;
 };

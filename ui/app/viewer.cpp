@@ -124,9 +124,11 @@ Viewer::~Viewer() {
   ImGui::DestroyContext(imgui_);
 }
 
-void Viewer::open_scene(const std::string& path) {
+void Viewer::open_scene(const std::string& path, const std::string& record_path) {
   // Load first: a bad scene leaves the running one alone.
-  auto session = std::make_unique<Session>(path, options_.session);
+  SessionOptions options = options_.session;
+  options.record_path = record_path;
+  auto session = std::make_unique<Session>(path, options);
   session_.reset();  // stops the old physics thread before its model goes away
   renderer_.reset();
   session_ = std::move(session);
@@ -495,8 +497,11 @@ void Viewer::record_panel() {
 
 void Viewer::start_recording() {
   // A recording replays from the scene file, so it starts from step 0 of a fresh run.
+  // Written as the session runs (recording.h), so a crash loses at most the last 60 ms.
   try {
-    open_scene(session_->scene_path());
+    const std::filesystem::path parent = std::filesystem::path(recording_path_edit_).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent);
+    open_scene(session_->scene_path(), recording_path_edit_);
     recording_ = true;
     recording_path_ = recording_path_edit_;
   } catch (const std::exception& e) {
@@ -506,20 +511,18 @@ void Viewer::start_recording() {
 
 void Viewer::stop_recording() {
   recording_ = false;
+  session_->close_recording();
   session_->poll();
-  try {
-    const std::filesystem::path parent = std::filesystem::path(recording_path_).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
-    write_recording(recording_path_, session_->model(), session_->log());
-    const LoopCounters counters = session_->counters();
-    if (counters.commands_unrecorded > 0)
-      note(recording_path_ + ": " + std::to_string(counters.commands_unrecorded) + " applied commands were lost; it will not replay this session");
-    else
-      note("recorded " + std::to_string(session_->log().commands.size()) + " commands over " +
-           std::to_string(session_->log().steps) + " steps to " + recording_path_);
-  } catch (const std::exception& e) {
-    note(e.what());
-  }
+  const LoopCounters counters = session_->counters();
+  const RecordingStream* recording = session_->recording();
+  if (!session_->recording_error().empty())
+    note(session_->recording_error());
+  else if (counters.commands_unrecorded > 0)
+    note(recording_path_ + ": " + std::to_string(counters.commands_unrecorded) +
+         " applied commands were lost; it will not replay this session");
+  else if (recording)
+    note("recorded " + std::to_string(recording->commands()) + " commands and " +
+         std::to_string(recording->hashes()) + " state hashes to " + recording_path_);
   std::snprintf(recording_path_edit_, sizeof recording_path_edit_, "%s/session_%s.toml",
                 options_.recordings_folder.c_str(), timestamp().c_str());
 }

@@ -57,7 +57,8 @@ class Viewer {
   const std::vector<std::string>& messages() const { return messages_; }
 
  private:
-  void open_scene(const std::string& path);
+  // `record_path`: record the new session to this file as it runs (empty: no recording).
+  void open_scene(const std::string& path, const std::string& record_path = "");
   void feed_imgui(const InputState& input, int width, int height, float dt_s);
   void panels(int width, int height);
   void scene_panel();
