@@ -12,6 +12,11 @@ void collect_result(Viewer& viewer, UiRunResult& result) {
   result.finite = session.history().finite;
   result.steps_at_level = session.history().steps_at_level;
   result.log = session.log();
+  if (const RecordingStream* r = session.recording()) {
+    result.recorded_commands = r->commands();
+    result.recorded_hashes = r->hashes();
+    result.recording_error = session.recording_error();
+  }
   for (const ObjectModel& o : session.model().objects) result.model_object_names.push_back(o.name);
 }
 

@@ -29,7 +29,11 @@ struct UiRunResult {
   LoopCounters counters;
   std::array<std::uint64_t, kAccuracyLevels> steps_at_level{};
   bool finite = true;
-  Recording log;                   // every applied command and hash (for --record)
+  Recording log;                   // every applied command and hash
+  // --record: written as the run went (by the first session); its figures where that session
+  // is still the viewer's at the end, and the first write error.
+  std::size_t recorded_commands = 0, recorded_hashes = 0;
+  std::string recording_error;
   std::vector<std::string> model_object_names;
   std::size_t ui_frames = 0;
   double ui_frame_mean_ms = 0.0, ui_frame_max_ms = 0.0;  // wall time per UI frame

@@ -111,7 +111,13 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   if (options_.scenes_folder.empty())
     options_.scenes_folder = std::filesystem::path(default_scene_path()).parent_path().string();
   scene_files_ = list_scenes(options_.scenes_folder);
-  open_scene(options_.scene_path.empty() ? default_scene_path() : options_.scene_path);
+  // `--record`: the first session is recorded as it runs, as the Record button would.
+  const std::string record_path = options_.session.record_path;
+  open_scene(options_.scene_path.empty() ? default_scene_path() : options_.scene_path, record_path);
+  if (!record_path.empty()) {
+    recording_ = true;
+    recording_path_ = record_path;
+  }
   std::snprintf(recording_path_edit_, sizeof recording_path_edit_, "%s/session_%s.toml",
                 options_.recordings_folder.c_str(), timestamp().c_str());
 }

@@ -52,9 +52,7 @@ struct RunFigures {
   std::array<std::uint64_t, ffd::kAccuracyLevels> steps_at_level{};
   bool finite = true;
   ffd::Recording log;
-  // --record in the loop-only mode: the file was written as the run went (else it is
-  // written from `log` at the end). Its figures and the first write error.
-  bool recorded_as_it_ran = false;
+  // --record: the file was written as the run went; its figures and the first write error.
   std::size_t recorded_commands = 0, recorded_hashes = 0;
   std::string recording_error;
   nlohmann::json ui;  // UI figures, when a viewer ran
@@ -102,7 +100,7 @@ bool write_report_file(const std::string& path, const nlohmann::json& j) {
   return !error;
 }
 
-int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
+int report(const RunOptions& o, const RunFigures& f) {
   const std::size_t steps = f.compute_ns.size();
   const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
   const ffd::TimeSummary lateness = ffd::summarize_times(f.lateness_ns);
@@ -135,7 +133,7 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
     std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
     status = kExitBadInput;
   }
-  if (!o.record_path.empty() && f.recorded_as_it_ran) {
+  if (!o.record_path.empty()) {  // written as the run went (Session, recording.h)
     if (!f.recording_error.empty()) {
       std::fprintf(stderr, "ffdsim: error: %s\n", f.recording_error.c_str());
       status = kExitBadInput;
@@ -143,18 +141,8 @@ int report(const RunOptions& o, const ffd::Model& model, const RunFigures& f) {
       std::printf("recorded %zu commands and %zu state hashes to %s (written as the run went)\n", f.recorded_commands,
                   f.recorded_hashes, o.record_path.c_str());
     }
-  } else if (!o.record_path.empty()) {
-    try {
-      ffd::write_recording(o.record_path, model, f.log);
-      if (!o.quiet)
-        std::printf("recorded %zu commands and %zu state hashes to %s\n", f.log.commands.size(), f.log.hashes.size(),
-                    o.record_path.c_str());
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-      status = kExitBadInput;
-    }
     if (f.counters.commands_unrecorded > 0) {
-      // Written anyway (it holds all that arrived), but it will not replay this session.
+      // It holds all that arrived, but it will not replay this session.
       std::fprintf(stderr, "ffdsim: error: %s: %llu applied commands were lost before the recorder read them\n",
                    o.record_path.c_str(), static_cast<unsigned long long>(f.counters.commands_unrecorded));
       status = kExitBadInput;
@@ -210,7 +198,6 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   session.stop();
   RunFigures f = figures_of(session, scene_path);
   if (const ffd::RecordingStream* r = session.recording()) {
-    f.recorded_as_it_ran = true;
     f.recorded_commands = r->commands();
     f.recorded_hashes = r->hashes();
     f.recording_error = session.recording_error();
@@ -300,6 +287,7 @@ int run_run(const RunOptions& given) {
     ffd::ui::UiRunOptions u;
     u.viewer.scene_path = scene_path;
     u.viewer.session.loop = loop_options(o);
+    u.viewer.session.record_path = o.record_path;
     u.script = script;
     const bool window = !o.headless && !demo;
     u.seconds = o.seconds > 0.0 ? o.seconds : script ? script_guard_seconds(*script) : window ? 0.0 : 10.0;
@@ -344,6 +332,9 @@ int run_run(const RunOptions& given) {
     figures.finite = r.finite;
     figures.steps_at_level = r.steps_at_level;
     figures.log = std::move(r.log);
+    figures.recorded_commands = r.recorded_commands;
+    figures.recorded_hashes = r.recorded_hashes;
+    figures.recording_error = r.recording_error;
     figures.ui = {{"renderer", r.renderer},         {"frames", r.ui_frames},
                   {"frame_mean_ms", r.ui_frame_mean_ms}, {"frame_max_ms", r.ui_frame_max_ms},
                   {"png_frames", r.frames_written}, {"script_events", r.script_events},
@@ -359,7 +350,7 @@ int run_run(const RunOptions& given) {
   }
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  const int report_status = report(o, model, figures);
+  const int report_status = report(o, figures);
   if (!o.report_path.empty() && !o.quiet) std::printf("report: %s\n", o.report_path.c_str());
   return status != kExitOk ? status : report_status;
 }
