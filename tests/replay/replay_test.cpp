@@ -2,6 +2,7 @@
 // recorded session replays bit for bit in fast and in real-time mode; a divergence is
 // reported with the step it was found at.
 #include <catch2/catch.hpp>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -29,7 +30,7 @@ std::string script_with(const std::string& body) {
 LoadedReplay parse(const std::string& text) { return parse_replay(text, "test.toml", ""); }
 
 std::string temporary_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("ffdsim_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("ffdsim_" + name + "_" + std::to_string(getpid()))).string();
 }
 
 }  // namespace

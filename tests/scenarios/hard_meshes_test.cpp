@@ -2,6 +2,7 @@
 // holes and a mesh with every vertex in one plane load and compile into lattices; a mesh
 // whose only triangle has no area is refused with a message naming the object and the file.
 #include <catch2/catch.hpp>
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -65,7 +66,7 @@ TEST_CASE("Hard meshes: a single triangle and an open tube and a flat square com
 
 TEST_CASE("Hard meshes: a mesh whose only triangle has no area is refused by name") {
   // Three corners on one line: nothing is left to embed once the degenerate triangle goes.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "ffdsim_hard_meshes";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("ffdsim_hard_meshes_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "line.obj") << "v 0 0 0\nv 0.1 0 0\nv 0.2 0 0\nf 1 2 3\n";
   const ffd::SceneSpec spec = ffd::parse_scene(R"(

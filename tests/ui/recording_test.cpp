@@ -48,7 +48,7 @@ std::string read_file(const fs::path& path) {
 
 // A scene folder of its own (scene + mesh), so that a test can edit or move it.
 fs::path scene_folder(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("ffdsim_test_" + name);
+  const fs::path dir = fs::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir / "scenes");
   fs::create_directories(dir / "meshes");

@@ -1,5 +1,7 @@
 // `ffdsim simulate` end to end: the report it writes, and how it fails on bad input.
 #include <catch2/catch.hpp>
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -27,7 +29,7 @@ Result run_ffdsim(const std::string& arguments, const std::string& prefix = "") 
 }
 
 std::filesystem::path temp_dir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("ffdsim_test_" + name);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   return dir;
 }
