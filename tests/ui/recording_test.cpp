@@ -16,28 +16,16 @@
 #include <string>
 #include <thread>
 
+#include "support/run_ffdsim.h"
+
 extern char** environ;
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-Result run_ffdsim(const std::string& arguments) {
-  Result r;
-  const std::string command = std::string(FFDSIM_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = test::ProgramResult;
+using test::run_ffdsim;
 
 std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -48,8 +36,7 @@ std::string read_file(const fs::path& path) {
 
 // A scene folder of its own (scene + mesh), so that a test can edit or move it.
 fs::path scene_folder(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = test::fresh_temp_dir(name);
   fs::create_directories(dir / "scenes");
   fs::create_directories(dir / "meshes");
   fs::create_directories(dir / "recordings");

@@ -1,38 +1,19 @@
 // `ffdsim simulate` end to end: the report it writes, and how it fails on bad input.
 #include <catch2/catch.hpp>
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "support/run_ffdsim.h"
+
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using Result = test::ProgramResult;
+using test::run_ffdsim;
 
-// `prefix` goes before the program (an `env ...` to change its environment).
-Result run_ffdsim(const std::string& arguments, const std::string& prefix = "") {
-  Result r;
-  const std::string command = prefix + std::string(FFDSIM_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::filesystem::path temp_dir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
-  std::filesystem::remove_all(dir);
-  return dir;
-}
+std::filesystem::path temp_dir(const std::string& name) { return test::fresh_temp_dir(name); }
 
 const std::string kScenes = std::string(FFDSIM_SCENARIO_DIR) + "/scenes/";
 

@@ -2,6 +2,7 @@
 // Running the viewer on a platform: a GLFW window where there is a display, or headless on
 // EGL writing PNG frames. Both return the same figures for the run report.
 #include <atomic>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,9 @@ struct UiRunOptions {
   double fps = 10.0;               // frames per simulated second written
   int width = 1280, height = 720;  // px
   const std::atomic<bool>* interrupted = nullptr;  // set by a signal handler: end the run cleanly
+  // Called on the UI thread at the first frame and then once a second of wall time (the run
+  // report written as the run goes).
+  std::function<void(const Session&)> every_second;
 };
 
 struct UiRunResult {

@@ -164,10 +164,10 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
 }
 
 // The physics loop alone (a Session without a viewer), its queues read at a 60 Hz display's pace.
-RunFigures figures_of(const ffd::ui::Session& session, const std::string& scene_path) {
+RunFigures figures_of(const ffd::ui::Session& session, const std::string& mode) {
   RunFigures f;
-  f.scene_path = scene_path;
-  f.mode = "headless loop";
+  f.scene_path = session.scene_path();
+  f.mode = mode;
   f.compute_ns = session.compute_ns();
   f.lateness_ns = session.lateness_ns();
   f.counters = session.counters();
@@ -190,13 +190,14 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
     session.poll();
     if (!o.report_path.empty() && std::chrono::steady_clock::now() >= next_report) {
-      write_report_file(o.report_path, report_json(o, figures_of(session, scene_path), false, true));
+      write_report_file(o.report_path, report_json(o, figures_of(session, "headless loop"), false, true));
       next_report += std::chrono::seconds(1);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(16));
   }
   session.stop();
-  RunFigures f = figures_of(session, scene_path);
+  RunFigures f = figures_of(session, "headless loop");
+  f.scene_path = scene_path;
   if (const ffd::RecordingStream* r = session.recording()) {
     f.recorded_commands = r->commands();
     f.recorded_hashes = r->hashes();
@@ -296,6 +297,12 @@ int run_run(const RunOptions& given) {
     u.width = o.width;
     u.height = o.height;
     u.interrupted = &g_interrupted;
+    // The report at the first frame and every second (the fallback below may set its path).
+    u.every_second = [&o, window](const ffd::ui::Session& session) {
+      if (!o.report_path.empty())
+        write_report_file(o.report_path,
+                          report_json(o, figures_of(session, window ? "window" : "headless viewer"), false, true));
+    };
     ffd::ui::UiRunResult r;
     try {
       try {

@@ -112,6 +112,7 @@ UiRunResult run_window(const UiRunOptions& options) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     auto previous = start;
+    auto next_second = start;
     double frame_ms_sum = 0.0;
     while (!glfwWindowShouldClose(window) && !viewer.quit_requested()) {
       const auto now = Clock::now();
@@ -119,6 +120,10 @@ UiRunResult run_window(const UiRunOptions& options) {
       if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
       const std::uint64_t step = viewer.session().newest_step();
       if (script && script->finished(step, dt)) break;
+      if (options.every_second && now >= next_second) {
+        options.every_second(viewer.session());
+        next_second += std::chrono::seconds(1);
+      }
       events.pressed.clear();
       events.characters.clear();
       events.wheel = 0.0f;

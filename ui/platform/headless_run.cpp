@@ -35,6 +35,7 @@ UiRunResult run_headless(const UiRunOptions& options) {
   constexpr auto kFramePeriod = std::chrono::microseconds(16'667);
   const auto start = Clock::now();
   auto previous = start;
+  auto next_second = start;
   double frame_ms_sum = 0.0;
   for (;;) {
     const auto now = Clock::now();
@@ -43,6 +44,10 @@ UiRunResult run_headless(const UiRunOptions& options) {
     if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds) break;
     if (script && script->finished(step, dt)) break;
     if (viewer.quit_requested()) break;
+    if (options.every_second && now >= next_second) {
+      options.every_second(viewer.session());
+      next_second += std::chrono::seconds(1);
+    }
     const InputState input = script ? script->next(viewer, step, dt, width, height) : InputState{};
     gl.bind();
     viewer.frame(input, width, height, std::chrono::duration<float>(now - previous).count());

@@ -1,0 +1,40 @@
+#pragma once
+// Running the ffdsim program from a test, as a user would from a shell.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace test {
+
+struct ProgramResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+// `prefix` goes before the program (an `env ...` to change its environment).
+inline ProgramResult run_ffdsim(const std::string& arguments, const std::string& prefix = "") {
+  ProgramResult r;
+  const std::string command = prefix + std::string(FFDSIM_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// An empty folder of this test process's own under the system's temporary folder (the
+// process id in its name: two test runs at once never share one).
+inline std::filesystem::path fresh_temp_dir(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+}  // namespace test
