@@ -167,7 +167,8 @@ TEST_CASE("a replay of a recording whose scene changed stops and names the scene
   CHECK(anyway.output.find("diverged: state hash at step") != std::string::npos);
 }
 
-TEST_CASE("the viewer's Record button writes the recording as the session runs, and it replays", "[cli][recording]") {
+TEST_CASE("the viewer's Record button writes the recording as the session runs, and it replays",
+          "[cli][recording][viewer]") {  // [viewer]: draws with Mesa (tests/CMakeLists.txt)
   const fs::path dir = scene_folder("viewer");
   const fs::path script = dir / "record.toml";
   std::ofstream(script) << R"(format = "ffdsim-ui-script"
