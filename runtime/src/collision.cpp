@@ -507,6 +507,8 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   for (Index p = 0; p < pairs; ++p) ++begin[scratch.pair_wave[p] + 1];
   for (std::uint32_t w = 0; w < waves; ++w) begin[w + 1] += begin[w];
   for (Index p = 0; p < pairs; ++p) scratch.wave_pairs[begin[scratch.pair_wave[p]]++] = p;
+  for (std::uint32_t w = waves; w > 0; --w) begin[w] = begin[w - 1];  // back to each wave's first pair
+  begin[0] = 0;
 
   for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) {
     w.counters = StageCounters{};
