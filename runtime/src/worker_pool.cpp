@@ -30,6 +30,8 @@ constexpr std::int64_t kStepNapNs = 100'000;
 // Inside a step a worker spins on PAUSE; after this many it also yields the core, so that
 // more threads than cores (8 threads on 2 cores, the determinism tests) still make progress.
 constexpr int kSpinsBeforeYield = 2048;
+// The chunk index of a closed cursor: past any job's chunk count.
+constexpr std::uint64_t kClosed = 0xffff'ffff;
 
 }  // namespace
 
@@ -74,14 +76,16 @@ bool WorkerPool::set_realtime_priority(int priority) {
 }
 
 bool WorkerPool::claim_and_run(std::uint32_t job, std::uint32_t thread) {
-  std::uint64_t cursor = cursor_.load(std::memory_order_relaxed);
+  std::uint64_t cursor = cursor_.load(std::memory_order_acquire);
   for (;;) {
     if (static_cast<std::uint32_t>(cursor >> 32) != job) return false;
     const std::uint32_t chunk = static_cast<std::uint32_t>(cursor);
-    // A successful claim proves the job is still open, so its fields are the ones written
-    // before the cursor was set (release / acquire below).
-    if (chunk >= chunks_.load(std::memory_order_relaxed)) return false;
-    if (cursor_.compare_exchange_weak(cursor, cursor + 1, std::memory_order_acquire, std::memory_order_relaxed)) {
+    // chunks_ may already be the next job's (run() writes it before it opens that job's
+    // cursor); then the cursor was closed before it (acquire / release), and the claim below
+    // fails. A claim that succeeds was made on an open cursor of `job`, whose fields are the
+    // ones written before it was opened.
+    if (chunk >= chunks_.load(std::memory_order_acquire)) return false;
+    if (cursor_.compare_exchange_weak(cursor, cursor + 1, std::memory_order_acquire, std::memory_order_acquire)) {
       fn_.load(std::memory_order_relaxed)(context_.load(std::memory_order_relaxed), chunk, thread);
       done_.fetch_add(1, std::memory_order_release);
       return true;
@@ -91,10 +95,15 @@ bool WorkerPool::claim_and_run(std::uint32_t job, std::uint32_t thread) {
 
 void WorkerPool::run(std::uint32_t chunks, ChunkFn fn, void* context) {
   const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
+  // Close the last job's cursor before its fields change: a worker that read that cursor at
+  // its end (every chunk claimed) and then reads the new, larger chunk count must fail its
+  // claim, or it would run a chunk past the end and count it in the new job's done_ (which
+  // then never equals `chunks`: the step hung).
+  cursor_.store((static_cast<std::uint64_t>(job) << 32) | kClosed, std::memory_order_relaxed);
   fn_.store(fn, std::memory_order_relaxed);
   context_.store(context, std::memory_order_relaxed);
-  chunks_.store(chunks, std::memory_order_relaxed);
   done_.store(0, std::memory_order_relaxed);
+  chunks_.store(chunks, std::memory_order_release);
   cursor_.store(static_cast<std::uint64_t>(job) << 32, std::memory_order_release);
   job_.store(job, std::memory_order_release);
   while (claim_and_run(job, 0)) {

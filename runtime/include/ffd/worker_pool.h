@@ -68,7 +68,8 @@ class WorkerPool {
 
   // The job being run. A claim is a compare-and-swap on `cursor_` (job id in the high 32
   // bits, next chunk in the low 32): a worker that wakes after its job is over fails the
-  // claim and never touches the next job's chunks.
+  // claim and never touches the next job's chunks. run() closes the cursor before it writes
+  // the next job's fields and opens it after.
   std::atomic<std::uint32_t> job_{0};
   std::atomic<std::uint64_t> cursor_{0};
   std::atomic<std::uint32_t> done_{0};
