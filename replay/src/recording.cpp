@@ -77,6 +77,9 @@ std::string command_block(const Model& model, const Command& c) {
       break;
     case CommandKind::SetProbeStiffness: s << "probe_stiffness = " << num(c.value) << "\n"; break;
     case CommandKind::SetAccuracy: s << "accuracy = " << static_cast<int>(c.value) << "\n"; break;
+    case CommandKind::SetResponse:
+      s << "response = \"" << response_name(static_cast<ContactResponse>(static_cast<int>(c.value))) << "\"\n";
+      break;
     case CommandKind::Reset: s << "reset = true\n"; break;
     case CommandKind::SetBudget: s << "budget_us = " << num(c.value) << "\n"; break;
     case CommandKind::Pause:

@@ -18,7 +18,7 @@ const std::vector<std::string_view> kRootKeys = {"format", "version", "descripti
 const std::vector<std::string_view> kRecordedKeys = {"ffdsim", "scene", "scene_hash", "scene_text", "meshes"};
 const std::vector<std::string_view> kRecordedFileKeys = {"path", "hash"};
 const std::vector<std::string_view> kEventKeys = {"at_step", "at_ms", "probe", "grab", "drag", "release",
-                                                  "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "accuracy", "auto_accuracy", "budget_us",
+                                                  "alpha", "beta", "gravity", "stiffness", "probe_stiffness", "accuracy", "response", "auto_accuracy", "budget_us",
                                                   "pause_ms", "resume", "single_step", "reset"};
 const std::vector<std::string_view> kGrabKeys = {"object", "point", "cell", "local", "target"};
 const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
@@ -310,6 +310,13 @@ class ScriptReader {
       } else if (key == "accuracy") {
         c.kind = CommandKind::SetAccuracy;
         c.value = static_cast<double>(e.integer(key, 0, 0, kAccuracyLevels - 1));
+      } else if (key == "response") {
+        c.kind = CommandKind::SetResponse;
+        const std::optional<std::string> name = e.string(key);
+        ContactResponse response = ContactResponse::Paper;
+        if (!response_from_name(*name, response))
+          e.fail_at(key, "unknown response " + in_quotes(*name) + " (valid: \"paper\", \"solver\")");
+        c.value = static_cast<double>(response);
       } else if (key == "auto_accuracy") {
         c.kind = CommandKind::AutoAccuracy;
         c.value = e.boolean(key, false) ? 1.0 : 0.0;

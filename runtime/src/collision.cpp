@@ -116,8 +116,8 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
   for (Index i : nodes_b) state.x[i] += move_b;
 }
 
-// Tested node k of box b at `level`: one of its 9 nodes, or (level 3) a surface node mapped
-// from the lattice as it is now.
+}  // namespace
+
 Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index b, int k) {
   const int box_node_count = level.end_node - level.first_node;
   if (k < box_node_count) return scratch.box_nodes[b][level.first_node + k];
@@ -128,6 +128,14 @@ Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, 
 int tested_node_count(const BoxLevel& level) {
   return level.end_node - level.first_node + (level.samples ? kBoxSampleCount : 0);
 }
+
+const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b, int k) {
+  const int box_node_count = level.end_node - level.first_node;
+  if (k < box_node_count) return level.boxes->box_local[b][level.first_node + k];
+  return model.box_samples[b][k - box_node_count];
+}
+
+namespace {
 
 // Where the answers to box pairs go: the stage's counters and the step's contact list (one
 // thread answering the pairs in order), or one thread's share of both (pairs answered in
@@ -431,8 +439,6 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
 
 }  // namespace
 
-namespace {
-
 // Whether a tested node of `mover` lies inside `container` (read-only: the detection half of
 // test_nodes).
 bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
@@ -444,6 +450,8 @@ bool nodes_inside(const Model& model, const BoxLevel& level, const State& state,
     if (node_in_box(planes, tested_node(model, level, state, scratch, mover, k)).inside) return true;
   return false;
 }
+
+namespace {
 
 // Pair p of the step's list, answered as Algorithm 1 does: a pair with a node of one box in
 // the other, or whose boxes a response has moved since the detection, is tested again, and

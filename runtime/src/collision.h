@@ -33,6 +33,16 @@ void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scr
 // Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
 void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell);
 
+// Tested node k of box b at `level`: one of its 9 nodes, or (level 3) a surface node mapped
+// from the lattice as it is now; how many a box has; and k's local coordinates in its cell.
+Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index b, int k);
+int tested_node_count(const BoxLevel& level);
+const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b, int k);
+
+// Whether a tested node of box `mover` lies inside box `container` (read-only).
+bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+                  Index container);
+
 // Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
 Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
 

@@ -19,6 +19,7 @@ const char* command_name(CommandKind kind) {
     case CommandKind::SetStiffness: return "stiffness";
     case CommandKind::SetProbeStiffness: return "probe_stiffness";
     case CommandKind::SetAccuracy: return "accuracy";
+    case CommandKind::SetResponse: return "response";
     case CommandKind::Reset: return "reset";
     case CommandKind::SetBudget: return "budget";
     case CommandKind::AutoAccuracy: return "auto_accuracy";
@@ -53,6 +54,7 @@ bool command_is_valid(const Model& model, const Command& c) {
       return has(model.settings.effects, Effect::Probe) && std::isfinite(c.value) && c.value >= 0.0;
     case CommandKind::SetAccuracy:
       return std::isfinite(c.value) && c.value >= 0.0 && c.value < kAccuracyLevels && c.value == std::floor(c.value);
+    case CommandKind::SetResponse: return c.value == 0.0 || c.value == 1.0;
     case CommandKind::SetBudget: return std::isfinite(c.value) && c.value > 0.0;
     case CommandKind::Pause: return std::isfinite(c.value) && c.value >= 0.0;
     case CommandKind::AutoAccuracy: return c.value == 0.0 || c.value == 1.0;
@@ -93,6 +95,10 @@ void apply_command(const Model& model, const State& initial, State& state, const
       break;
     case CommandKind::SetProbeStiffness: state.params.probe_stiffness = c.value; break;
     case CommandKind::SetAccuracy: state.params.accuracy = static_cast<Accuracy>(static_cast<int>(c.value)); break;
+    case CommandKind::SetResponse:
+      state.params.response = static_cast<ContactResponse>(static_cast<int>(c.value));
+      wake_all(state);  // contacts that held a sleeper are answered another way now
+      break;
     case CommandKind::Reset: {
       // Element-wise copies into vectors of the same size: no allocation.
       const std::uint64_t step = state.step;
@@ -101,6 +107,7 @@ void apply_command(const Model& model, const State& initial, State& state, const
       state.params.beta = initial.params.beta;
       state.params.probe_stiffness = initial.params.probe_stiffness;
       state.params.accuracy = initial.params.accuracy;
+      state.params.response = initial.params.response;
       std::copy(initial.params.stiffness.begin(), initial.params.stiffness.end(), state.params.stiffness.begin());
       std::copy(initial.x.begin(), initial.x.end(), state.x.begin());
       std::copy(initial.v.begin(), initial.v.end(), state.v.begin());

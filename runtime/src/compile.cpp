@@ -447,6 +447,9 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   }
   if (planes) model.pipeline.push_back(Stage::Planes);
   if (probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::Interaction);
+  // Runs only while the response is "solver" (a command may switch it): then the stages
+  // above find the contacts on the predicted positions and this one answers them.
+  if (box_box || planes || probe || has(effects, Effect::Grab)) model.pipeline.push_back(Stage::ContactSolve);
   if (has(effects, Effect::Sleeping)) model.pipeline.push_back(Stage::Sleep);
   // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
   model.sleep_steps = static_cast<std::uint32_t>(
@@ -458,6 +461,7 @@ State initial_state(const Model& model) {
   State state;
   state.params.gravity = model.settings.gravity;
   state.params.alpha = model.settings.alpha;
+  state.params.response = model.settings.response;
   state.params.beta = model.settings.beta;
   state.params.probe_stiffness = model.settings.probe.coupling_stiffness;
   state.params.accuracy = model.settings.accuracy;

@@ -54,52 +54,78 @@ void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, do
 // The stiffness is the object's live value in State::params, so it can be tuned between steps.
 // Gauss-Seidel colour by colour; a colour's springs share no node and go through the SIMD
 // kernel several at a time, with the result of one after the other.
-void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                           Scratch& scratch) {
+// A step is: the prediction (here), p.iterations sweeps (sweep_mass_spring), then velocities
+// from positions (finish_mass_spring). The "paper" response runs them back to back; the
+// "solver" response puts the contacts' projections between the sweeps.
+// The kernel's view of one object's springs at `stiffness`: XPBD's alpha~ = 1 / (k dt^2) and
+// the damping term gamma = c / (k dt).
+SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, State& state, Scratch& scratch) {
   const double dt = model.settings.dt;
-  const MassSpringParams& p = obj.mass_spring;
+  const double compliance = 1.0 / stiffness;            // m/N
+  const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
+  const double gamma = compliance * obj.mass_spring.damping / dt;  // XPBD damping term
+  return SpringSolve{state.x.data()->data(),
+                     scratch.x_prev.data()->data(),
+                     model.node_inv_mass.data(),
+                     model.spring_node_a.data(),
+                     model.spring_node_b.data(),
+                     model.spring_rest_length.data(),
+                     scratch.lambda.data(),
+                     scratch.spring_inv_denominator.data(),
+                     alpha_tilde,
+                     gamma};
+}
+
+// x_prev = x, the prediction x += dt v, the multipliers reset, the denominators for the
+// object's live stiffness.
+SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
+                                Scratch& scratch) {
+  const double dt = model.settings.dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     scratch.x_prev[n] = state.x[n];
     state.x[n] += dt * state.v[n];  // prediction
   }
-  const double compliance = 1.0 / stiffness;            // m/N
-  const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
-  const double gamma = compliance * p.damping / dt;     // XPBD damping term
+  const SpringSolve solve = spring_solve(model, obj, stiffness, state, scratch);
   const std::size_t object = &obj - model.objects.data();
   if (scratch.denominator_stiffness[object] != stiffness) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
       const Spring& spring = model.springs[s];
       const double w = model.node_inv_mass[spring.a] + model.node_inv_mass[spring.b];
-      scratch.spring_inv_denominator[s] = 1.0 / ((1.0 + gamma) * w + alpha_tilde);
+      scratch.spring_inv_denominator[s] = 1.0 / ((1.0 + solve.gamma) * w + solve.alpha_tilde);
     }
     scratch.denominator_stiffness[object] = stiffness;
   }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
-  const SpringSolve solve{state.x.data()->data(),
-                          scratch.x_prev.data()->data(),
-                          model.node_inv_mass.data(),
-                          model.spring_node_a.data(),
-                          model.spring_node_b.data(),
-                          model.spring_rest_length.data(),
-                          scratch.lambda.data(),
-                          scratch.spring_inv_denominator.data(),
-                          alpha_tilde,
-                          gamma};
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) scratch.tetrahedron_lambda[t] = 0.0;
-  for (int it = 0; it < p.iterations; ++it) {
-    for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
-      const SpringColour& colour = model.spring_colours[c];
-      project_springs(solve, colour.begin, colour.end, colour.independent);
-    }
-    for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
-      project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), scratch.tetrahedron_lambda[t], state);
+  return solve;
+}
+
+// One Gauss-Seidel sweep over the object's springs, colour by colour, then its volumes.
+void sweep_mass_spring(const Model& model, const ObjectModel& obj, const SpringSolve& solve, State& state,
+                       Scratch& scratch) {
+  const double dt = model.settings.dt;
+  for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
+    const SpringColour& colour = model.spring_colours[c];
+    project_springs(solve, colour.begin, colour.end, colour.independent);
   }
-  const double inv_dt = 1.0 / dt;
+  for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
+    project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), scratch.tetrahedron_lambda[t], state);
+}
+
+void finish_mass_spring(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+  const double inv_dt = 1.0 / model.settings.dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
   // The force each constraint applied this step, elastic and damping (XPBD: lambda / dt^2), N.
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = scratch.lambda[s] * inv_dt * inv_dt;
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
     state.volume_pressure[t] = scratch.tetrahedron_lambda[t] * inv_dt * inv_dt;
+}
+
+void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
+                           Scratch& scratch) {
+  const SpringSolve solve = predict_mass_spring(model, obj, stiffness, state, scratch);
+  for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_mass_spring(model, obj, solve, state, scratch);
+  finish_mass_spring(model, obj, state, scratch);
 }
 
 // Lattice shape matching (Rivers & James 2007, FastLSM, with Mueller et al. 2005
@@ -157,6 +183,64 @@ void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
   if (scratch.pool) scratch.pool->parallel_for(tasks, integrate);
   else
     for (Index t = 0; t < tasks; ++t) integrate(t, 0);
+}
+
+// The "solver" response's share of the dynamics (contact_solver.cpp runs the step around it).
+// Every object's prediction; a shape-matching object takes its whole step here (it has no
+// sweeps), its start kept in x_prev so that finish_dynamics gives it its contacts' velocity.
+void predict_dynamics(const Model& model, State& state, Scratch& scratch) {
+  Index tasks = 0;
+  for (Index i : scratch.objects_by_work)
+    if (!state.asleep[i]) scratch.object_tasks[tasks++] = i;
+  scratch.object_task_count = tasks;
+  auto predict = [&](std::uint32_t task, std::uint32_t) {
+    const Index i = scratch.object_tasks[task];
+    const ObjectModel& obj = model.objects[i];
+    if (obj.dynamics == DynamicsKind::MassSpring) {
+      predict_mass_spring(model, obj, state.params.stiffness[i], state, scratch);
+      return;
+    }
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) scratch.x_prev[n] = state.x[n];
+    integrate_shape_matching(model, obj, state.params.stiffness[i], state, scratch);
+  };
+  if (scratch.pool) scratch.pool->parallel_for(tasks, predict);
+  else
+    for (Index t = 0; t < tasks; ++t) predict(t, 0);
+}
+
+int dynamics_iterations(const Model& model) {
+  int iterations = 1;
+  for (const ObjectModel& obj : model.objects)
+    if (obj.dynamics == DynamicsKind::MassSpring) iterations = std::max(iterations, obj.mass_spring.iterations);
+  return iterations;
+}
+
+void sweep_dynamics(const Model& model, int iteration, State& state, Scratch& scratch) {
+  auto sweep = [&](std::uint32_t task, std::uint32_t) {
+    const Index i = scratch.object_tasks[task];
+    const ObjectModel& obj = model.objects[i];
+    if (obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations)
+      sweep_mass_spring(model, obj, spring_solve(model, obj, state.params.stiffness[i], state, scratch), state, scratch);
+  };
+  if (scratch.pool) scratch.pool->parallel_for(scratch.object_task_count, sweep);
+  else
+    for (Index t = 0; t < scratch.object_task_count; ++t) sweep(t, 0);
+}
+
+void finish_dynamics(const Model& model, State& state, Scratch& scratch) {
+  auto finish = [&](std::uint32_t task, std::uint32_t) {
+    const Index i = scratch.object_tasks[task];
+    const ObjectModel& obj = model.objects[i];
+    if (obj.dynamics == DynamicsKind::MassSpring) {
+      finish_mass_spring(model, obj, state, scratch);
+      return;
+    }
+    const double inv_dt = 1.0 / model.settings.dt;
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
+  };
+  if (scratch.pool) scratch.pool->parallel_for(scratch.object_task_count, finish);
+  else
+    for (Index t = 0; t < scratch.object_task_count; ++t) finish(t, 0);
 }
 
 }  // namespace ffd

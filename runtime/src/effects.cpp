@@ -41,6 +41,23 @@ const char* accuracy_name(Accuracy a) {
   return "?";
 }
 
+const char* response_name(ContactResponse r) {
+  switch (r) {
+    case ContactResponse::Paper: return "paper";
+    case ContactResponse::Solver: return "solver";
+  }
+  return "?";
+}
+
+bool response_from_name(const std::string& name, ContactResponse& out) {
+  for (ContactResponse r : {ContactResponse::Paper, ContactResponse::Solver})
+    if (name == response_name(r)) {
+      out = r;
+      return true;
+    }
+  return false;
+}
+
 const char* stage_name(Stage s) {
   switch (s) {
     case Stage::Gravity: return "gravity";
@@ -50,6 +67,7 @@ const char* stage_name(Stage s) {
     case Stage::NarrowPhase: return "narrow_phase";
     case Stage::Planes: return "planes";
     case Stage::Interaction: return "interaction";
+    case Stage::ContactSolve: return "contact_solve";
     case Stage::Sleep: return "sleep";
     case Stage::Count: break;
   }

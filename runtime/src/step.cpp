@@ -10,6 +10,7 @@
 #include "dynamics.h"
 #include "ffd/worker_pool.h"
 #include "collision.h"
+#include "contact_solver.h"
 #include "interaction.h"
 #include "sleep.h"
 
@@ -119,6 +120,8 @@ Scratch make_scratch(const Model& model) {
   s.object_tasks.resize(model.objects.size());
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
   s.contacts.resize(kContactCapacity);
+  s.constraints.resize(std::max<std::size_t>(4096, 4 * boxes));
+  s.object_solving.assign(model.objects.size(), 0);
   std::size_t most_triangles = 0;
   for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
     most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);
@@ -158,6 +161,9 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
 }
 
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) {
+  // Contact constraints: twice the room, up to 64 per box of the largest set.
+  if (last.constraints_overflow && scratch.constraints.size() < 64 * largest_box_set(model) + 4096)
+    scratch.constraints.resize(2 * scratch.constraints.size());
   if (!last.hash_overflow || !model.collides) return;
   // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,
   // not a large one: stop growing there and keep reporting the overflow.
@@ -191,13 +197,20 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   const BoxLevel level = box_level(model, state.params.accuracy);
   scratch.contact_count = 0;
   scratch.contacts_dropped = 0;
+  // The response "solver" needs its stage; a scene without contacts has nothing to answer.
+  const bool solver = state.params.response == ContactResponse::Solver &&
+                      std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
   if (scratch.pool) scratch.pool->begin_step();
   for (Stage stage : model.pipeline) {
+    if (stage == Stage::ContactSolve && !solver) continue;  // not run: its time stays -1
     const std::int64_t t0 = now_ns();
     StageCounters& counters = report.counters[static_cast<std::size_t>(stage)];
     switch (stage) {
       case Stage::Gravity: apply_gravity(model, state); break;
-      case Stage::Dynamics: integrate_dynamics(model, state, scratch); break;
+      case Stage::Dynamics:
+        if (solver) begin_solver_step(model, state, scratch);  // the prediction; the solve comes last
+        else integrate_dynamics(model, state, scratch);
+        break;
       case Stage::BoxUpdate:
         update_boxes(model, *level.boxes, state, scratch);
         counters.boxes_updated = static_cast<std::uint32_t>(level.boxes->size());
@@ -212,7 +225,11 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       }
       case Stage::NarrowPhase: {
         double& depth = report.max_box_penetration_m;
-        if (level.exact) {
+        if (solver && !level.exact) {
+          find_box_contacts(model, level, state, scratch, counters, depth);
+        } else if (level.exact) {
+          // The exact level answers its vertex contacts at once under either response (its
+          // points lie on triangles of other cells: README, Known limits).
           if (friction) collide_surfaces<true>(model, state, scratch, counters, depth);
           else collide_surfaces<false>(model, state, scratch, counters, depth);
         } else {
@@ -222,11 +239,19 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         break;
       }
       case Stage::Planes:
-        if (friction) collide_planes<true>(model, level, state, scratch, counters, report.max_box_penetration_m);
+        if (solver) find_plane_contacts(model, level, state, scratch, counters, report.max_box_penetration_m);
+        else if (friction) collide_planes<true>(model, level, state, scratch, counters, report.max_box_penetration_m);
         else collide_planes<false>(model, level, state, scratch, counters, report.max_box_penetration_m);
         break;
       case Stage::Interaction:
-        interact(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
+        if (!solver) interact(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
+        else if (has(model.settings.effects, Effect::Probe))
+          find_probe_contacts(model, *level.boxes, state, scratch, counters, report.max_box_penetration_m);
+        break;  // the grab is solved with the contacts
+      case Stage::ContactSolve:
+        solve_contacts(model, state, scratch);
+        report.constraints = static_cast<std::uint32_t>(scratch.constraint_count);
+        report.constraints_overflow = scratch.constraints_dropped;
         break;
       case Stage::Sleep: counters.objects_asleep = update_sleep(model, state); break;
       case Stage::Count: break;

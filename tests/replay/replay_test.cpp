@@ -366,3 +366,23 @@ energy_gain_max_j = 1e6
   CHECK(result.max_energy_gain_j + result.initial_energy_j + result.probe_work_at_max_gain_j <=
         result.max_energy_j + 1e-9);
 }
+
+TEST_CASE("Replay scripts: a response event reads, a recording writes it back, and an unknown one is an error") {
+  const LoadedReplay replay = parse(script_with("[[event]]\nat_ms = 20\nresponse = \"solver\"\n"));
+  REQUIRE(replay.script.commands.size() == 1);
+  const Command& c = replay.script.commands[0];
+  CHECK(c.kind == CommandKind::SetResponse);
+  CHECK(c.value == static_cast<double>(ContactResponse::Solver));
+  Recording recording;
+  recording.scene_path = kScene;
+  recording.steps = 200;
+  recording.commands.push_back(c);
+  const std::string text = recording_text(replay.model, recording);
+  CHECK_THAT(text, Contains("response = \"solver\""));
+  const LoadedReplay again = parse(text);
+  REQUIRE(again.script.commands.size() == 1);
+  CHECK(again.script.commands[0].kind == CommandKind::SetResponse);
+  CHECK(again.script.commands[0].value == static_cast<double>(ContactResponse::Solver));
+  CHECK_THROWS_WITH(parse(script_with("[[event]]\nat_ms = 20\nresponse = \"fast\"\n")),
+                    Contains("test.toml:6:12: event[0].response: unknown response 'fast'"));
+}

@@ -141,10 +141,11 @@ TEST_CASE("the pipeline holds exactly the stages the effects ask for", "[scene][
   spec.planes.push_back(test::floor_plane());
   spec.settings.effects = Effect::Gravity | Effect::Planes;
   CHECK(test::compile_quietly(spec).pipeline ==
-        std::vector<Stage>{Stage::Gravity, Stage::Dynamics, Stage::BoxUpdate, Stage::Planes});
+        std::vector<Stage>{Stage::Gravity, Stage::Dynamics, Stage::BoxUpdate, Stage::Planes, Stage::ContactSolve});
   spec.settings.effects = Effect::InterCollision | Effect::Planes;
   CHECK(test::compile_quietly(spec).pipeline ==
-        std::vector<Stage>{Stage::Dynamics, Stage::BoxUpdate, Stage::BroadPhase, Stage::NarrowPhase, Stage::Planes});
+        std::vector<Stage>{Stage::Dynamics, Stage::BoxUpdate, Stage::BroadPhase, Stage::NarrowPhase, Stage::Planes,
+                           Stage::ContactSolve});  // runs only under the response "solver"
   spec.settings.effects = static_cast<EffectSet>(Effect::Gravity);
   CHECK_THROWS_WITH(test::compile_quietly(spec), Catch::Contains("planes"));  // planes declared, effect absent
 }

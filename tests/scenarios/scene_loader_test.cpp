@@ -167,6 +167,7 @@ TEST_CASE("missing optional keys take their documented defaults", "[scene_loader
   CHECK(scene.settings.seed == 1);
   CHECK(scene.settings.hash_cell_size == 0.0);
   CHECK(scene.settings.min_box_thickness == 0.1);
+  CHECK(scene.settings.response == ffd::ContactResponse::Paper);
   CHECK(scene.planes.empty());
 
   REQUIRE(scene.objects.size() == 1);
@@ -332,13 +333,13 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
     require_error(
         "[simulation]\neffects = []\nwind = 3\n",
         "inline.toml:3:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response)");
   }
   SECTION("the first unknown key in file order is reported") {
     require_error(
         "[simulation]\nwind = 1\neffects = []\nalpha_ = 1\n",
         "inline.toml:2:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response)");
   }
   SECTION("a key that is the start of a valid one") {
     require_error(scene_with_object("name = \"a\"\nrotation = [0, 45, 0]\n"),
@@ -1151,4 +1152,15 @@ TEST_CASE("scene limits turn oversized scenes into errors naming the limit", "[s
                       ": object[0].glyph.sample_spacing: em_size / sample_spacing is 4096, more than the limit of "
                       "2000; use a larger sample_spacing");
   }
+}
+
+TEST_CASE("simulation.response picks the contact response, and an unknown one names the file and field",
+          "[scene_loader]") {
+  const std::string head = "[simulation]\neffects = [\"planes\"]\nresponse = ";
+  const std::string tail = "\n[[plane]]\n[[object]]\nname = \"b\"\nshape = \"sphere\"\nradius = 0.1\nshape_matching = {}\n";
+  CHECK(parse(head + "\"solver\"" + tail).settings.response == ffd::ContactResponse::Solver);
+  CHECK(parse(head + "\"paper\"" + tail).settings.response == ffd::ContactResponse::Paper);
+  CHECK_THROWS_WITH(parse(head + "\"springs\"" + tail),
+                    "inline.toml:3:12: simulation.response: unknown response 'springs' (valid: \"paper\", \"solver\")");
+  CHECK_THROWS_WITH(parse(head + "1" + tail), Catch::Matchers::Contains("simulation.response: expected a string"));
 }

@@ -21,6 +21,7 @@ enum class CommandKind : std::uint8_t {
   SetStiffness,  // object + value: N/m (mass_spring) or pull fraction in (0, 1] (shape_matching)
   SetProbeStiffness,  // value: virtual coupling stiffness of the probe, N/m (>= 0)
   SetAccuracy,   // value: collision accuracy level 0..5 (spec.h, Accuracy)
+  SetResponse,   // value: contact response 0 = paper, 1 = solver (spec.h, ContactResponse)
   Reset,         // back to the scene's initial State (the step index keeps counting)
   // Loop commands: they steer the physics loop and leave the State alone.
   SetBudget,     // value: latency budget, microseconds (> 0)

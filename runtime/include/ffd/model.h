@@ -22,6 +22,7 @@ enum class Stage : std::uint8_t {
   NarrowPhase,  // node-in-box tests + immediate response, Algorithm 1, sections 6.2 and 7
   Planes,       // static planes: node-below-plane tests + the same response
   Interaction,  // haptic probe (virtual coupling + probe contacts) and grab spring
+  ContactSolve, // response "solver": lattice constraints and contacts solved together
   Sleep,        // objects at rest fall asleep (the "sleeping" effect)
   Count
 };

@@ -114,6 +114,14 @@ enum class Accuracy : std::uint8_t {
 inline constexpr int kAccuracyLevels = 6;
 const char* accuracy_name(Accuracy a);
 
+// How the contacts the narrow phase finds are answered (README, "Two contact responses").
+enum class ContactResponse : std::uint8_t {
+  Paper = 0,   // at once, pair by pair: eq. 7-9 on the two cells' nodes (section 7, Algorithm 1)
+  Solver = 1,  // as constraints, solved with the springs and volumes in the same iterations
+};
+const char* response_name(ContactResponse r);
+bool response_from_name(const std::string& name, ContactResponse& out);
+
 // Scene-wide settings. alpha, beta and gravity are the starting values of State::params,
 // which commands may change while a scene runs.
 struct SimulationSettings {
@@ -126,6 +134,7 @@ struct SimulationSettings {
   double hash_cell_size = 0.0;           // m; broad-phase grid cell edge, 0 = the objects' cell sizes
   double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
   Accuracy accuracy = Accuracy::CentreOfMass;  // starting level; commands may switch it
+  ContactResponse response = ContactResponse::Paper;  // starting response; commands may switch it
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within

@@ -19,6 +19,7 @@ struct TunableParams {
   std::vector<double> stiffness;
   double probe_stiffness = 0.0;  // N/m, the probe's virtual coupling spring
   Accuracy accuracy = Accuracy::CentreOfMass;  // collision accuracy level (spec.h)
+  ContactResponse response = ContactResponse::Paper;  // how contacts are answered (spec.h)
 };
 
 // The haptic probe (the "probe" effect): the device position commanded from outside and the

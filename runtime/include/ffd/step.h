@@ -45,6 +45,27 @@ struct Contact {
 
 inline constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::Count);
 
+// The response "solver" (contact_solver.h): a contact is a constraint between two points, each
+// carried by lattice nodes through trilinear weights (eq. 2): the point that must stay out
+// (side b: a box node, a surface node, the probe) and a point of the surface it must stay
+// out of (side a: the mean of a box face's four corners, the probe's centre, nothing for a
+// static plane). A node index kProbeNode stands for the probe proxy.
+inline constexpr Index kProbeNode = kNoIndex - 1;
+struct ContactSide {
+  std::array<Index, 8> node;
+  std::array<double, 8> weight;
+  std::uint8_t count = 0;  // node[0 .. count) carry the point
+};
+struct ContactConstraint {
+  ContactSide a, b;
+  Vec3 normal = Vec3::Zero();    // unit, from side a's surface towards the outside
+  double rest = 0.0;             // C = normal . (p_b - p_a) - rest >= 0 (m)
+  double approach = 0.0;         // normal . (v_b - v_a) when found, m/s (< 0: approaching)
+  double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
+  double lambda = 0.0;           // normal correction so far this step, m (>= 0)
+  Vec3 friction = Vec3::Zero();  // tangential correction so far this step, m
+};
+
 struct StepReport {
   std::uint64_t step = 0;                          // index of the step this report describes
   std::array<std::int64_t, kStageCount> stage_ns{};  // wall time per stage, ns (-1: not run)
@@ -55,6 +76,8 @@ struct StepReport {
   bool hash_overflow = false;          // broad phase ran out of room for grid entries or pairs; grow_scratch() fixes it
   std::uint32_t contacts_recorded = 0; // Scratch::contacts[0 .. contacts_recorded) hold this step's
   std::uint32_t contacts_dropped = 0;  // contacts beyond Scratch::contacts' capacity (not recorded)
+  std::uint32_t constraints = 0;       // response "solver": contact constraints solved this step
+  bool constraints_overflow = false;   // some were dropped for want of room; grow_scratch() fixes it
 };
 
 // Working memory of step(): derived per step, never part of the State.
@@ -181,6 +204,17 @@ struct Scratch {
     std::uint32_t merged = 0;    // contacts[0 .. merged) are in the step's list
   };
   std::vector<NarrowWorkspace> narrow_workspaces;  // one per thread (attach_pool())
+  // The response "solver" (contact_solver.h): the step's contacts as constraints (the list
+  // the detection writes and the solve reads; capacity grown between steps), the objects this
+  // step solves (awake at its start), the probe's start of step and its device's velocity,
+  // and the grab's multiplier.
+  std::vector<ContactConstraint> constraints;
+  Index constraint_count = 0;
+  bool constraints_dropped = false;
+  std::vector<std::uint8_t> object_solving;
+  Index object_task_count = 0;
+  Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
+  Vec3 grab_lambda = Vec3::Zero();
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;

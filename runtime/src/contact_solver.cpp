@@ -1,0 +1,371 @@
+#include "contact_solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "dynamics.h"
+#include "ffd/box_test.h"
+#include "ffd/trilinear.h"
+#include "ffd/worker_pool.h"
+#include "interaction.h"
+#include "sleep.h"
+
+namespace ffd {
+
+namespace {
+
+// Below this approach speed (m/s) a contact is resting: it gets no restitution, only its
+// approach stopped (Mueller et al. 2020 use 2 |g| dt likewise), so a pile does not bounce on
+// the velocity gravity adds in one step.
+constexpr double kRestingApproach = 0.05;
+
+// A point carried by cell `cell` at local coordinates `local` (eq. 2).
+ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
+  ContactSide side;
+  side.node = model.cell_nodes[cell];
+  side.weight = trilinear_weights(local);
+  side.count = 8;
+  return side;
+}
+
+// The mean of a box face's four corners: the point its plane moves with.
+ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int face) {
+  ContactSide side;
+  side.node = model.cell_nodes[boxes.box_cell[b]];
+  side.weight.fill(0.0);
+  side.count = 8;
+  for (int i = 0; i < 4; ++i) {
+    const std::array<double, 8> w = trilinear_weights(boxes.box_local[b][kBoxFaces[face][i]]);
+    for (int j = 0; j < 8; ++j) side.weight[j] += 0.25 * w[j];
+  }
+  return side;
+}
+
+ContactSide probe_point() {
+  ContactSide side;
+  side.node.fill(kNoIndex);
+  side.weight.fill(0.0);
+  side.node[0] = kProbeNode;
+  side.weight[0] = 1.0;
+  side.count = 1;
+  return side;
+}
+
+// The solve's view of the nodes: positions, velocities and inverse masses, the probe proxy
+// included; an object not solved this step (asleep at its start) is static.
+struct Bodies {
+  const Model& model;
+  State& state;
+  const Scratch& scratch;
+
+  Vec3& x(Index n) const { return n == kProbeNode ? state.probe.x : state.x[n]; }
+  Vec3& v(Index n) const { return n == kProbeNode ? state.probe.v : state.v[n]; }
+  const Vec3& x_prev(Index n) const { return n == kProbeNode ? scratch.probe_x_prev : scratch.x_prev[n]; }
+  double inv_mass(Index n) const {
+    if (n == kProbeNode) return 1.0 / model.settings.probe.mass;
+    return scratch.object_solving[model.node_object[n]] ? model.node_inv_mass[n] : 0.0;
+  }
+  Vec3 point(const ContactSide& s) const {
+    Vec3 p = Vec3::Zero();
+    for (int j = 0; j < s.count; ++j) p += s.weight[j] * x(s.node[j]);
+    return p;
+  }
+  Vec3 point_prev(const ContactSide& s) const {
+    Vec3 p = Vec3::Zero();
+    for (int j = 0; j < s.count; ++j) p += s.weight[j] * x_prev(s.node[j]);
+    return p;
+  }
+  Vec3 velocity(const ContactSide& s) const {
+    Vec3 u = Vec3::Zero();
+    for (int j = 0; j < s.count; ++j) u += s.weight[j] * v(s.node[j]);
+    return u;
+  }
+  double weighted_inv_mass(const ContactSide& s) const {
+    double w = 0.0;
+    for (int j = 0; j < s.count; ++j) w += s.weight[j] * s.weight[j] * inv_mass(s.node[j]);
+    return w;
+  }
+  // Moves the side's point by `delta` / (its share): node j by w_j / m_j * delta, so that the
+  // point moves by weighted_inv_mass * delta.
+  void move(const ContactSide& s, const Vec3& delta) const {
+    for (int j = 0; j < s.count; ++j) x(s.node[j]) += (s.weight[j] * inv_mass(s.node[j])) * delta;
+  }
+  void push(const ContactSide& s, const Vec3& delta_v) const {
+    for (int j = 0; j < s.count; ++j) v(s.node[j]) += (s.weight[j] * inv_mass(s.node[j])) * delta_v;
+  }
+};
+
+// Appends a contact: side b's point must stay on the outer side (along n) of side a's
+// surface; it is `depth` inside now.
+void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
+                 double depth) {
+  if (scratch.constraint_count >= scratch.constraints.size()) {
+    scratch.constraints_dropped = true;
+    return;
+  }
+  ContactConstraint& c = scratch.constraints[scratch.constraint_count++];
+  c.a = a;
+  c.b = b;
+  c.normal = n;
+  c.rest = n.dot(bodies.point(b) - bodies.point(a)) + depth;
+  c.approach = n.dot(bodies.velocity(b) - bodies.velocity(a));
+  c.inv_mass = 0.0;
+  c.lambda = 0.0;
+  c.friction = Vec3::Zero();
+}
+
+}  // namespace
+
+void begin_solver_step(const Model& model, State& state, Scratch& scratch) {
+  scratch.constraint_count = 0;
+  scratch.constraints_dropped = false;
+  for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
+  predict_dynamics(model, state, scratch);
+  scratch.grab_lambda = Vec3::Zero();
+}
+
+void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+                       StageCounters& counters, double& max_depth) {
+  const BoxSet& boxes = *level.boxes;
+  const Index pairs = scratch.pair_count;
+  // Which pairs hold a node of one box in the other: read-only, over the pool.
+  constexpr Index kPairsPerChunk = 32;
+  auto detect = [&](std::uint32_t chunk, std::uint32_t) {
+    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
+      const BoxPair& pair = scratch.pairs[p];
+      scratch.pair_hit[p] = nodes_inside(model, level, state, scratch, pair.a, pair.b) ||
+                            nodes_inside(model, level, state, scratch, pair.b, pair.a);
+    }
+  };
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
+  else
+    for (Index c = 0; c < chunks; ++c) detect(c, 0);
+  const int node_count = tested_node_count(level);
+  counters.node_tests += 2 * node_count * pairs;
+  const Bodies bodies{model, state, scratch};
+  const double recent = kRecentEntrySteps * model.settings.dt;
+  // The hits, in pair order, into the contact list.
+  for (Index p = 0; p < pairs; ++p) {
+    const BoxPair& pair = scratch.pairs[p];
+    const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
+    if (sleeping(model)) meet(state, o1, o2);  // a moving object wakes a sleeper it meets (from the next step)
+    const bool self = o1 == o2;
+    if (self) ++counters.self_pairs_tested;
+    else ++counters.inter_pairs_tested;
+    if (!scratch.pair_hit[p]) continue;
+    for (int half = 0; half < 2; ++half) {
+      const Index mover = half == 0 ? pair.a : pair.b, container = half == 0 ? pair.b : pair.a;
+      const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+      if (planes.degenerate) continue;
+      const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
+      const Vec3 relative_velocity =
+          mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
+      for (int k = 0; k < node_count; ++k) {
+        const Vec3 node = tested_node(model, level, state, scratch, mover, k);
+        const NodeInBox hit = node_in_box(planes, node, relative_velocity, recent);
+        if (!hit.inside) continue;
+        if (self) ++counters.self_contacts;
+        else ++counters.inter_contacts;
+        max_depth = std::max(max_depth, hit.depth);
+        scratch.record_contact(node, planes.normal[hit.face], hit.depth, self ? ContactKind::Self : ContactKind::Inter);
+        add_contact(bodies, scratch, face_point(model, boxes, container, hit.face),
+                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[hit.face],
+                    hit.depth);
+      }
+    }
+  }
+}
+
+void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+                         StageCounters& counters, double& max_depth) {
+  const BoxSet& boxes = *level.boxes;
+  const Bodies bodies{model, state, scratch};
+  ContactSide ground;
+  ground.node.fill(kNoIndex);
+  ground.weight.fill(0.0);
+  ground.count = 0;
+  const int node_count = tested_node_count(level);
+  for (const PlaneModel& plane : model.planes) {
+    for (Index b = 0; b < boxes.size(); ++b) {
+      const Index cell = boxes.box_cell[b];
+      if (!scratch.object_solving[model.cell_object[cell]]) continue;  // frozen where it rests
+      double support = -plane.offset;  // the box's AABB bounds its nodes
+      for (int axis = 0; axis < 3; ++axis)
+        support += plane.normal[axis] * (plane.normal[axis] > 0.0 ? scratch.box_lo[axis][b] : scratch.box_hi[axis][b]);
+      if (support >= 0.0) continue;
+      if (level.exact) {
+        // Level 5: the cell's surface vertices.
+        for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
+          const Index vertex = model.cell_vertices[i];
+          const ContactSide side = cell_point(model, cell, model.surface_vertex_local[vertex]);
+          const double height = plane.normal.dot(bodies.point(side)) - plane.offset;
+          ++counters.node_tests;
+          if (!(height < 0.0)) continue;
+          ++counters.plane_contacts;
+          max_depth = std::max(max_depth, -height);
+          scratch.record_contact(bodies.point(side), plane.normal, -height, ContactKind::Plane);
+          add_contact(bodies, scratch, ground, side, plane.normal, -height);
+        }
+        continue;
+      }
+      for (int k = 0; k < node_count; ++k) {
+        const Vec3 p = tested_node(model, level, state, scratch, b, k);
+        const double height = plane.normal.dot(p) - plane.offset;
+        ++counters.node_tests;
+        if (!(height < 0.0)) continue;
+        ++counters.plane_contacts;
+        max_depth = std::max(max_depth, -height);
+        scratch.record_contact(p, plane.normal, -height, ContactKind::Plane);
+        add_contact(bodies, scratch, ground, cell_point(model, cell, tested_node_local(model, level, b, k)),
+                    plane.normal, -height);
+      }
+    }
+  }
+}
+
+void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
+                         StageCounters& counters, double& max_depth) {
+  const ProbeSettings& settings = model.settings.probe;
+  ProbeState& probe = state.probe;
+  const double dt = model.settings.dt, m = settings.mass;
+  const double k = state.params.probe_stiffness, c = settings.coupling_damping;
+  // The virtual coupling, backward Euler (as interaction.cpp): the proxy's prediction.
+  const Vec3 device_velocity = (probe.device - probe.device_previous) / dt;
+  probe.device_previous = probe.device;
+  scratch.probe_device_velocity = device_velocity;
+  scratch.probe_x_prev = probe.x;
+  probe.v = (m * probe.v + dt * (k * (probe.device - probe.x) + c * device_velocity)) / (m + dt * dt * k + dt * c);
+  probe.x += dt * probe.v;
+
+  const Bodies bodies{model, state, scratch};
+  const double radius = settings.radius, recent = kRecentEntrySteps * dt;
+  const Vec3 lo = probe.x - Vec3::Constant(radius), hi = probe.x + Vec3::Constant(radius);
+  for (Index b = 0; b < boxes.size(); ++b) {
+    ensure_box(model, boxes, state, scratch, b, counters);
+    if (lo.x() > scratch.box_hi[0][b] || lo.y() > scratch.box_hi[1][b] || lo.z() > scratch.box_hi[2][b] ||
+        hi.x() < scratch.box_lo[0][b] || hi.y() < scratch.box_lo[1][b] || hi.z() < scratch.box_lo[2][b])
+      continue;
+    const Index cell = boxes.box_cell[b];
+    wake(state, model.cell_object[cell]);
+    const BoxPlanes planes = box_planes(scratch.box_nodes[b]);
+    // The probe's nodes in the box: the probe (side b) stays out of the box's face (side a).
+    for (int n = 0; n < kProbeNodeCount && !planes.degenerate; ++n) {
+      ++counters.node_tests;
+      const Vec3 node = probe.x + radius * kProbeNodeOffsets[n];
+      const Vec3 relative_velocity = probe.v - mean_velocity(state, model.cell_nodes[cell]);
+      const NodeInBox hit = node_in_box(planes, node, relative_velocity, recent);
+      if (!hit.inside) continue;
+      ++counters.probe_contacts;
+      max_depth = std::max(max_depth, hit.depth);
+      scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
+      add_contact(bodies, scratch, face_point(model, boxes, b, hit.face), probe_point(), planes.normal[hit.face],
+                  hit.depth);
+    }
+    // The box's nodes in the sphere: each node (side b) stays out of the sphere (side a).
+    for (int n = 0; n < 9; ++n) {
+      ++counters.node_tests;
+      const Vec3 offset = scratch.box_nodes[b][n] - probe.x;
+      const double distance = offset.norm();
+      if (!(distance < radius) || !(distance > 1e-12)) continue;
+      const Vec3 outward = offset / distance;
+      ++counters.probe_contacts;
+      max_depth = std::max(max_depth, radius - distance);
+      scratch.record_contact(scratch.box_nodes[b][n], outward, radius - distance, ContactKind::Probe);
+      add_contact(bodies, scratch, probe_point(), cell_point(model, cell, boxes.box_local[b][n]), outward,
+                  radius - distance);
+    }
+  }
+}
+
+namespace {
+
+// One pass over the contact list: each contact's non-penetration (an inequality: its
+// correction lambda stays >= 0), then its friction, a tangential correction that cancels the
+// points' sliding over the step within the Coulomb cone |friction| <= mu lambda.
+void project_contacts(const Bodies& bodies, Scratch& scratch, double mu) {
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    ContactConstraint& c = scratch.constraints[i];
+    if (!(c.inv_mass > 0.0)) continue;
+    const Vec3 pa = bodies.point(c.a), pb = bodies.point(c.b);
+    const double C = c.normal.dot(pb - pa) - c.rest;
+    const double lambda = std::max(c.lambda - C / c.inv_mass, 0.0);
+    const double d_lambda = lambda - c.lambda;
+    c.lambda = lambda;
+    if (d_lambda != 0.0) {
+      bodies.move(c.b, d_lambda * c.normal);
+      bodies.move(c.a, -d_lambda * c.normal);
+    }
+    if (!(mu > 0.0) || !(c.lambda > 0.0)) continue;
+    const Vec3 slide = (bodies.point(c.b) - bodies.point_prev(c.b)) - (bodies.point(c.a) - bodies.point_prev(c.a));
+    const Vec3 tangential = slide - c.normal.dot(slide) * c.normal;
+    Vec3 friction = c.friction - tangential / c.inv_mass;
+    const double limit = mu * c.lambda, size = friction.norm();
+    if (size > limit) friction *= limit / size;
+    const Vec3 delta = friction - c.friction;
+    c.friction = friction;
+    bodies.move(c.b, delta);
+    bodies.move(c.a, -delta);
+  }
+}
+
+// The grab as a soft XPBD constraint C = p - target (compliance 1 / k, damping c), solved with
+// the rest, so that a heavy object hangs from it without the explicit spring's overshoot.
+void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
+  const GrabState& grab = bodies.state.grab;
+  const ContactSide side = cell_point(model, grab.cell, grab.local);
+  const double w = bodies.weighted_inv_mass(side);
+  if (!(w > 0.0)) return;
+  const double dt = model.settings.dt, k = model.settings.grab.stiffness, damping = model.settings.grab.damping;
+  const double alpha_tilde = 1.0 / (k * dt * dt), gamma = damping / (k * dt);
+  const Vec3 p = bodies.point(side);
+  const Vec3 moved = p - bodies.point_prev(side);
+  const Vec3 d_lambda = (-(p - grab.target) - alpha_tilde * scratch.grab_lambda - gamma * moved) /
+                        ((1.0 + gamma) * w + alpha_tilde);
+  scratch.grab_lambda += d_lambda;
+  bodies.move(side, d_lambda);
+}
+
+}  // namespace
+
+void solve_contacts(const Model& model, State& state, Scratch& scratch) {
+  const Bodies bodies{model, state, scratch};
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    ContactConstraint& c = scratch.constraints[i];
+    c.inv_mass = bodies.weighted_inv_mass(c.a) + bodies.weighted_inv_mass(c.b);
+  }
+  const double mu = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
+  const bool grabbing = has(model.settings.effects, Effect::Grab) && state.grab.active;
+  if (grabbing) wake(state, model.cell_object[state.grab.cell]);  // solved from the next step if asleep now
+  const int iterations = dynamics_iterations(model);
+  for (int it = 0; it < iterations; ++it) {
+    sweep_dynamics(model, it, state, scratch);
+    project_contacts(bodies, scratch, mu);
+    if (grabbing) project_grab(model, bodies, scratch);
+  }
+  finish_dynamics(model, state, scratch);
+  const double dt = model.settings.dt;
+  if (has(model.settings.effects, Effect::Probe)) state.probe.v = (state.probe.x - scratch.probe_x_prev) / dt;
+  // Velocities: each contact that pushed leaves its points' normal velocity at the rebound
+  // 1 - alpha of its approach (none for a resting contact), not at what its position
+  // correction would make of it (the corrections of a step, divided by dt, are metres per
+  // second): eq. 8's damping, applied once the positions are solved.
+  const double restitution = 1.0 - state.params.alpha;
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
+    const double u = c.normal.dot(bodies.velocity(c.b) - bodies.velocity(c.a));
+    const double target = c.approach < -kRestingApproach ? -restitution * c.approach : 0.0;
+    const double dv = (target - u) / c.inv_mass;
+    bodies.push(c.b, dv * c.normal);
+    bodies.push(c.a, -dv * c.normal);
+  }
+  if (has(model.settings.effects, Effect::Probe)) {
+    const ProbeState& probe = state.probe;
+    state.probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
+                        model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
+  }
+  if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
+}
+
+}  // namespace ffd

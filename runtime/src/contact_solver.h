@@ -1,0 +1,33 @@
+#pragma once
+// The response "solver" (README, "Two contact responses"): the contacts the paper's detection
+// finds are answered as constraints inside the lattice's XPBD solve, not at once as eq. 7-9
+// answer them. A step under it:
+//   Dynamics      every awake object's prediction x* = x + dt v (begin_solver_step)
+//   BoxUpdate, BroadPhase
+//   NarrowPhase   node-in-box tests on x* (the paper's eq. 3-7, read-only): each node inside
+//                 becomes a ContactConstraint (find_box_contacts)
+//   Planes        each tested node below a plane, likewise (find_plane_contacts)
+//   Interaction   the probe's coupling predicted, its contacts found (find_probe_contacts)
+//   ContactSolve  per iteration: one sweep of every object's springs and volumes, then every
+//                 contact (non-penetration with Coulomb friction, mu = beta) and the grab;
+//                 then v = (x - x_prev) / dt and the contacts' restitution 1 - alpha
+//                 (solve_contacts)
+// The contact list (Scratch::constraints) is the boundary: detection writes it, the solve reads
+// it. Everything runs in list order on one thread but the sweeps (objects over the pool), so
+// the result does not depend on the thread count.
+#include "collision.h"
+
+namespace ffd {
+
+void begin_solver_step(const Model& model, State& state, Scratch& scratch);
+
+void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+                       StageCounters& counters, double& max_depth);
+void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+                         StageCounters& counters, double& max_depth);
+void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
+                         StageCounters& counters, double& max_depth);
+
+void solve_contacts(const Model& model, State& state, Scratch& scratch);
+
+}  // namespace ffd

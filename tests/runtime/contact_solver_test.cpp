@@ -1,0 +1,149 @@
+// The response "solver" (runtime/src/contact_solver.h): contacts found by the paper's detection
+// become constraints solved with the springs. The same states on any thread count, no
+// allocation in a step, a resting box held on the floor, a live switch between the responses.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include "ffd/command.h"
+#include "ffd/scene_loader.h"
+#include "ffd/step.h"
+#include "ffd/worker_pool.h"
+#include "support/allocation_counter.h"
+#include "support/test_scenes.h"
+
+using namespace ffd;
+
+namespace {
+
+Model probe_and_grab_scene(ContactResponse response) {
+  SceneSpec spec = load_scene_file(FFDSIM_TEST_DATA_DIR "/scenes/probe_and_grab.toml");
+  spec.settings.response = response;
+  return test::compile_quietly(spec);
+}
+
+// The probe pressed down onto the upper box from step 50, the lower box grabbed at step 150
+// and dragged 5 cm sideways and up.
+void apply_user(const Model& model, const State& initial, State& state, int i) {
+  Command c;
+  if (i >= 50) {
+    c.kind = CommandKind::ProbePose;
+    c.vector = Vec3(0.02, std::max(0.22, 0.4 - 0.001 * (i - 50)), 0.0);
+    apply_command(model, initial, state, c);
+  }
+  if (i == 150) {
+    c.kind = CommandKind::Grab;
+    c.cell = model.objects[0].cell_begin;
+    c.local = Vec3(0.5, 0.5, 0.5);
+    apply_command(model, initial, state, c);
+  }
+  if (i > 150) {
+    c.kind = CommandKind::Drag;
+    c.vector = state.grab.target + Vec3(0.0002, 0.0002, 0.0);
+    if (i < 400) apply_command(model, initial, state, c);
+  }
+}
+
+struct Run {
+  std::vector<std::uint64_t> hashes;
+  std::uint64_t allocations = 0;
+  std::uint32_t most_constraints = 0;
+};
+
+Run run(const Model& model, int threads, int steps) {
+  Run r;
+  State state = initial_state(model);
+  const State initial = state;
+  Scratch scratch = make_scratch(model);
+  WorkerPool pool(threads, [] { test::count_allocations_on_this_thread(true); },
+                  [] { test::count_allocations_on_this_thread(false); });
+  if (threads > 1) attach_pool(model, scratch, pool);
+  StepReport report;
+  r.hashes.reserve(static_cast<std::size_t>(steps));
+  test::reset_allocations();
+  for (int i = 0; i < steps; ++i) {
+    apply_user(model, initial, state, i);
+    test::count_allocations_on_this_thread(true);
+    step(model, state, scratch, report);
+    test::count_allocations_on_this_thread(false);
+    REQUIRE_FALSE(report.constraints_overflow);
+    r.hashes.push_back(state_hash(state));
+    r.most_constraints = std::max(r.most_constraints, report.constraints);
+  }
+  r.allocations = test::allocations();
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("Response solver: contacts, probe and grab give the same states on 1, 2 and 8 threads, and no allocation",
+          "[determinism]") {
+  const Model model = probe_and_grab_scene(ContactResponse::Solver);
+  const Run one = run(model, 1, 500);
+  CHECK(one.allocations == 0);
+  CHECK(one.most_constraints > 50);  // the boxes on the floor and on each other, the probe
+  for (const int threads : {2, 8}) {
+    const Run many = run(model, threads, 500);
+    INFO(threads << " threads");
+    CHECK(many.allocations == 0);
+    for (std::size_t i = 0; i < one.hashes.size(); ++i) {
+      INFO("step " << i + 1);
+      REQUIRE(many.hashes[i] == one.hashes[i]);
+    }
+  }
+}
+
+TEST_CASE("Response solver: a box dropped on the floor lands and rests on it", "[contact_solver]") {
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::Friction;
+  spec.settings.response = ContactResponse::Solver;
+  spec.planes.push_back(test::floor_plane());
+  spec.objects.push_back(test::box_object("box", Vec3(0.1, 0.1, 0.1), 0.025, Vec3(0.0, 0.07, 0.0)));
+  const Model model = test::compile_quietly(spec);
+  State state = initial_state(model);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  double lowest = INFINITY;
+  for (int i = 0; i < 1000; ++i) {
+    step(model, state, scratch, report);
+    // The box's surface: its FFD AABBs' nodes (the lattice reaches past the surface).
+    update_all_boxes(model, state, scratch);
+    for (Index b = 0; b < model.boxes.size(); ++b)
+      for (const Vec3& x : scratch.box_nodes[b]) lowest = std::min(lowest, x.y());
+  }
+  double fastest = 0.0;
+  for (const Vec3& v : state.v) fastest = std::max(fastest, v.norm());
+  CHECK(report.stage_ns[static_cast<std::size_t>(Stage::ContactSolve)] >= 0);  // the solver answered
+  CHECK(report.constraints > 0);
+  CHECK(lowest > -0.001);  // never more than 1 mm into the floor, from a 2 cm fall
+  CHECK(centre_of_mass(model, state.x, 0).y() == Approx(0.05).margin(0.002));
+  CHECK(fastest < 0.02);   // m/s, after 1 s
+}
+
+TEST_CASE("Response: a live switch is a state command; paper stays bit for bit what it was", "[contact_solver]") {
+  const Model paper = probe_and_grab_scene(ContactResponse::Paper);
+  const Model solver = probe_and_grab_scene(ContactResponse::Solver);
+  State a = initial_state(paper), b = initial_state(solver);
+  const State initial_a = a;
+  CHECK(b.params.response == ContactResponse::Solver);
+  // Switched at step 100 on the paper scene, the solver takes over from the same state.
+  Scratch sa = make_scratch(paper);
+  StepReport report;
+  for (int i = 0; i < 100; ++i) step(paper, a, sa, report);
+  CHECK(report.stage_ns[static_cast<std::size_t>(Stage::ContactSolve)] == -1);  // not run under "paper"
+  Command c;
+  c.kind = CommandKind::SetResponse;
+  c.value = 1.0;
+  REQUIRE(command_is_valid(paper, c));
+  apply_command(paper, initial_a, a, c);
+  CHECK(a.params.response == ContactResponse::Solver);
+  step(paper, a, sa, report);
+  CHECK(report.stage_ns[static_cast<std::size_t>(Stage::ContactSolve)] >= 0);
+  c.value = 2.0;
+  CHECK_FALSE(command_is_valid(paper, c));
+  // Reset returns to the scene's response.
+  c.kind = CommandKind::Reset;
+  apply_command(paper, initial_a, a, c);
+  CHECK(a.params.response == ContactResponse::Paper);
+}
