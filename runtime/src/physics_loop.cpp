@@ -211,6 +211,7 @@ void PhysicsLoop::Impl::publish_frame() {
   f.beta = state.params.beta;
   f.gravity = state.params.gravity;
   f.accuracy = state.params.accuracy;
+  f.response = state.params.response;
   f.auto_accuracy = auto_accuracy;
   f.report = report;
   f.paused = paused;

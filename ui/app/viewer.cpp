@@ -463,6 +463,15 @@ void Viewer::tuning_panel() {
     ImGui::EndCombo();
   }
   remember("accuracy");
+  // The contact response (README, "Two contact responses"): a recorded state command.
+  const ContactResponse response = frame ? frame->response : session_->initial().params.response;
+  if (ImGui::BeginCombo("response", response_name(response))) {
+    for (ContactResponse r : {ContactResponse::Paper, ContactResponse::Solver})
+      if (ImGui::Selectable(response_name(r), r == response))
+        send({.kind = CommandKind::SetResponse, .value = static_cast<double>(r)});
+    ImGui::EndCombo();
+  }
+  remember("response");
   bool auto_on = automatic;
   if (ImGui::Checkbox("fit accuracy to the budget", &auto_on))
     send({.kind = CommandKind::AutoAccuracy, .value = auto_on ? 1.0 : 0.0});

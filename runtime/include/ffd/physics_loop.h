@@ -99,6 +99,7 @@ struct Frame {
   double alpha = 0.0, beta = 0.0;
   Vec3 gravity = Vec3::Zero();
   Accuracy accuracy = Accuracy::CentreOfMass;
+  ContactResponse response = ContactResponse::Paper;  // how this step answered its contacts
   bool auto_accuracy = false;  // the governor chooses the level
   StepReport report;
   bool paused = false;
