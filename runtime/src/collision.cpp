@@ -582,12 +582,10 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
 
 }  // namespace
 
-template <bool kFriction>
-void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
-                   double& max_depth) {
+void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
+                    StageCounters& counters) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
-  // Detection, read-only and in parallel: which pairs have a node of one box in the other.
   // (A pair of two sleepers is not looked at; should one of them wake before its turn, it is
   // tested then.)
   constexpr Index kPairsPerChunk = 32;
@@ -600,16 +598,26 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
                             nodes_inside(model, level, state, scratch, pair.b, pair.a);
     }
   };
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
+  else
+    for (Index c = 0; c < chunks; ++c) detect(c, 0);
+  counters.node_tests += 2 * tested_node_count(level) * pairs;
+}
+
+template <bool kFriction>
+void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+                   double& max_depth) {
+  const BoxSet& boxes = *level.boxes;
+  const Index pairs = scratch.pair_count;
   // The detection costs what testing every pair costs, spread over the threads; it pays where
   // few pairs need testing again after it: with T threads, fewer than 1 - 1/T of them (the
   // share of the last step). Either way the result is the same: without it, every pair is
   // tested in the response loop below, as Algorithm 1 does.
   const int threads = scratch.pool ? scratch.pool->threads() : 1;
   const bool detecting = threads > 1 && scratch.narrow_retested_share < 1.0 - 1.0 / threads;
-  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
   if (detecting) {
-    scratch.pool->parallel_for(chunks, detect);
-    counters.node_tests += 2 * tested_node_count(level) * pairs;
+    find_pair_hits(model, level, state, scratch, counters);
   } else {
     std::fill(scratch.pair_hit.begin(), scratch.pair_hit.begin() + pairs, std::uint8_t{1});
   }

@@ -43,6 +43,12 @@ const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b
 bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
                   Index container);
 
+// The narrow phase's detection, read-only and over the pool: Scratch::pair_hit[p] for each
+// candidate pair, whether a tested node of one box lies inside the other (or both objects
+// sleep: such a pair is looked at when its turn comes). Counts the node tests.
+void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
+                    StageCounters& counters);
+
 // Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
 Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
 

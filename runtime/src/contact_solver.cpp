@@ -128,21 +128,8 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
                        StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
-  // Which pairs hold a node of one box in the other: read-only, over the pool.
-  constexpr Index kPairsPerChunk = 32;
-  auto detect = [&](std::uint32_t chunk, std::uint32_t) {
-    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
-      const BoxPair& pair = scratch.pairs[p];
-      scratch.pair_hit[p] = nodes_inside(model, level, state, scratch, pair.a, pair.b) ||
-                            nodes_inside(model, level, state, scratch, pair.b, pair.a);
-    }
-  };
-  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
-  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
-  else
-    for (Index c = 0; c < chunks; ++c) detect(c, 0);
+  find_pair_hits(model, level, state, scratch, counters);  // which pairs hold a node of one box in the other
   const int node_count = tested_node_count(level);
-  counters.node_tests += 2 * node_count * pairs;
   const Bodies bodies{model, state, scratch};
   const double recent = kRecentEntrySteps * model.settings.dt;
   // The hits, in pair order, into the contact list.
@@ -228,15 +215,9 @@ void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, 
                          StageCounters& counters, double& max_depth) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
-  const double dt = model.settings.dt, m = settings.mass;
-  const double k = state.params.probe_stiffness, c = settings.coupling_damping;
-  // The virtual coupling, backward Euler (as interaction.cpp): the proxy's prediction.
-  const Vec3 device_velocity = (probe.device - probe.device_previous) / dt;
-  probe.device_previous = probe.device;
-  scratch.probe_device_velocity = device_velocity;
+  const double dt = model.settings.dt;
   scratch.probe_x_prev = probe.x;
-  probe.v = (m * probe.v + dt * (k * (probe.device - probe.x) + c * device_velocity)) / (m + dt * dt * k + dt * c);
-  probe.x += dt * probe.v;
+  scratch.probe_device_velocity = step_probe_coupling(model, state);  // the proxy's prediction
 
   const Bodies bodies{model, state, scratch};
   const double radius = settings.radius, recent = kRecentEntrySteps * dt;

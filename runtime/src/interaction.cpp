@@ -92,10 +92,9 @@ void probe_against_box(const Model& model, const BoxSet& boxes, State& state, Sc
   }
 }
 
-// Virtual coupling (Colgate et al. 1995) integrated by backward Euler, so any stiffness and
-// damping are stable at the fixed step; then contacts; then the force the device renders.
-void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
-                double& max_depth) {
+}  // namespace
+
+Vec3 step_probe_coupling(const Model& model, State& state) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
   const double dt = model.settings.dt, m = settings.mass;
@@ -105,6 +104,19 @@ void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& 
   // m (v' - v) = dt (k (device - x - dt v') + c (device_velocity - v'))
   probe.v = (m * probe.v + dt * (k * (probe.device - probe.x) + c * device_velocity)) / (m + dt * dt * k + dt * c);
   probe.x += dt * probe.v;
+  return device_velocity;
+}
+
+namespace {
+
+// Virtual coupling (Colgate et al. 1995) integrated by backward Euler, so any stiffness and
+// damping are stable at the fixed step; then contacts; then the force the device renders.
+void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+                double& max_depth) {
+  const ProbeSettings& settings = model.settings.probe;
+  ProbeState& probe = state.probe;
+  const double k = state.params.probe_stiffness, c = settings.coupling_damping;
+  const Vec3 device_velocity = step_probe_coupling(model, state);
 
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
   const Vec3 lo = probe.x - Vec3::Constant(settings.radius), hi = probe.x + Vec3::Constant(settings.radius);

@@ -11,6 +11,11 @@ namespace ffd {
 void interact(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
               double& max_depth);
 
+// The probe's virtual coupling (Colgate et al. 1995) by backward Euler, so any stiffness and
+// damping are stable at the fixed step: the proxy's velocity and position before its
+// contacts. Returns the device's velocity (m/s), which the force output needs.
+Vec3 step_probe_coupling(const Model& model, State& state);
+
 // The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
 // directions, 12 edge and 8 corner directions of a cube (27 in all).
 inline constexpr int kProbeNodeCount = 27;
