@@ -40,6 +40,7 @@ std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
   for (const GapLimit& gap : script.gaps) g = std::gcd(g, gap.every_steps);
   for (const PositionLimit& p : script.positions) g = std::gcd(g, p.every_steps);
   if (script.rest.speed_max_m_s) g = std::gcd(g, script.rest.every_steps);
+  for (const CreepLimit& c : script.creeps) g = std::gcd(g, c.every_steps);
   return g;
 }
 
@@ -54,6 +55,27 @@ std::string vector_text(const Vec3& v) {
   std::snprintf(buffer, sizeof buffer, "[%.10g, %.10g, %.10g]", v.x(), v.y(), v.z());
   return buffer;
 }
+
+// One creep assertion over its samples: each object's centre at `from`, the farthest since.
+struct CreepMeasure {
+  std::uint64_t samples = 0;
+  std::vector<Vec3> start;
+  double worst_m = 0.0;
+  std::uint64_t worst_step = 0;
+  Index worst_object = 0;
+};
+
+// The force output over one window: |F| summed and squared (for its mean and deviation).
+struct ForceWindowMeasure {
+  std::uint64_t steps = 0;
+  double sum = 0.0, sum_sq = 0.0, low = INFINITY, high = 0.0;
+  double mean() const { return steps ? sum / static_cast<double>(steps) : 0.0; }
+  double deviation() const {
+    if (!steps) return 0.0;
+    const double m = mean();
+    return std::sqrt(std::max(0.0, sum_sq / static_cast<double>(steps) - m * m));
+  }
+};
 
 // Positions of one position assertion over its samples.
 struct PositionMeasure {
@@ -120,6 +142,10 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
   State surface_state = initial_state(model);  // holds a snapshot's lattice for deformed_surface()
   std::vector<PositionMeasure> positions(script.positions.size());
+  std::vector<CreepMeasure> creeps(script.creeps.size());
+  std::vector<ForceWindowMeasure> force_windows(script.force_windows.size());
+  double motion_rms = 0.0, motion_kinetic = 0.0, motion_fastest = 0.0;
+  std::uint64_t motion_rms_step = 0, motion_kinetic_step = 0, motion_fastest_step = 0, motion_steps = 0;
   std::vector<Vec3> centres, rest_centres;  // this snapshot's centres of mass; the last rest sample's
   std::optional<std::uint64_t> rest_step;   // the step of the last rest sample
   double rest_max_speed = 0.0;
@@ -183,6 +209,23 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
         }
       }
       track(t.max_speed_m_s, result.max_speed_m_s, result.max_speed_step);
+      if (t.step > script.motion.from_step) {
+        ++motion_steps;
+        track(t.rms_speed_m_s, motion_rms, motion_rms_step);
+        track(t.kinetic_energy_j, motion_kinetic, motion_kinetic_step);
+        track(t.max_speed_m_s, motion_fastest, motion_fastest_step);
+      }
+      for (std::size_t i = 0; i < script.force_windows.size(); ++i) {
+        const ForceWindow& w = script.force_windows[i];
+        if (t.step <= w.from_step || t.step > w.to_step) continue;
+        const double f = t.probe_force_n.norm();
+        ForceWindowMeasure& m = force_windows[i];
+        ++m.steps;
+        m.sum += f;
+        m.sum_sq += f * f;
+        m.low = std::min(m.low, f);
+        m.high = std::max(m.high, f);
+      }
       track(t.max_penetration_m, result.max_penetration_m, result.max_penetration_step);
       result.mean_contacts += t.contacts;  // summed here, divided at the end
       if (t.step > script.contact.contacts_from_step && t.contacts < result.min_contacts) {
@@ -198,7 +241,25 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       std::copy(s->x.begin(), s->x.end(), surface_state.x.begin());
       const std::uint64_t step = s->step;
       loop.recycle(s);
-      if (!script.positions.empty() || script.rest.speed_max_m_s) centres_of_mass(model, surface_state.x, centres);
+      if (!script.positions.empty() || script.rest.speed_max_m_s || !script.creeps.empty())
+        centres_of_mass(model, surface_state.x, centres);
+      for (std::size_t i = 0; i < script.creeps.size(); ++i) {
+        const CreepLimit& c = script.creeps[i];
+        if (step < c.from_step || step > c.to_step || step % c.every_steps != 0) continue;
+        CreepMeasure& m = creeps[i];
+        if (m.samples++ == 0) {
+          m.start = centres;
+          continue;
+        }
+        for (Index object : c.objects) {
+          const double moved = (centres[object] - m.start[object]).norm();
+          if (moved > m.worst_m) {
+            m.worst_m = moved;
+            m.worst_step = step;
+            m.worst_object = object;
+          }
+        }
+      }
       for (std::size_t i = 0; i < script.positions.size(); ++i) {
         const PositionLimit& p = script.positions[i];
         if (step < p.from_step || step > p.to_step || step % p.every_steps != 0) continue;
@@ -392,6 +453,67 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       a.measured = number(rest_max_speed, "m/s") + " (" + model.objects[rest_worst_object].name + ", step " +
                    std::to_string(rest_worst_step) + ")";
       a.passed = rest_max_speed <= *script.rest.speed_max_m_s;
+    }
+    out.push_back(a);
+  }
+  if (script.motion.rms_speed_max_m_s || script.motion.kinetic_energy_max_j || script.motion.speed_max_m_s) {
+    if (motion_steps == 0) {
+      AssertionResult a;
+      a.name = "motion";
+      a.measured = "no steps after step " + std::to_string(script.motion.from_step);
+      a.limit = "at least one step";
+      a.passed = false;
+      out.push_back(a);
+    } else {
+      const std::string from = " from step " + std::to_string(script.motion.from_step + 1);
+      check_upper(out, "motion.rms_speed_max_m_s" + from, "", script.motion.rms_speed_max_m_s, motion_rms, "m/s", false,
+                  motion_rms_step);
+      check_upper(out, "motion.kinetic_energy_max_j" + from, "", script.motion.kinetic_energy_max_j, motion_kinetic, "J",
+                  false, motion_kinetic_step);
+      check_upper(out, "motion.speed_max_m_s" + from, "", script.motion.speed_max_m_s, motion_fastest, "m/s", false,
+                  motion_fastest_step);
+    }
+  }
+  for (std::size_t i = 0; i < script.creeps.size(); ++i) {
+    const CreepLimit& c = script.creeps[i];
+    const CreepMeasure& m = creeps[i];
+    AssertionResult a;
+    a.name = "creep[" + c.pattern + "]";
+    a.where = c.where;
+    a.limit = "<= " + number(c.max_m, "m") + " from step " + std::to_string(c.from_step) + " to " + std::to_string(c.to_step);
+    if (m.samples < 2) {
+      a.measured = "fewer than two samples (snapshots dropped or the run ended early)";
+      a.passed = false;
+    } else {
+      a.measured = number(m.worst_m, "m") + " (" + model.objects[m.worst_object].name + ", step " +
+                   std::to_string(m.worst_step) + ")";
+      a.passed = m.worst_m <= c.max_m;
+    }
+    out.push_back(a);
+  }
+  for (std::size_t i = 0; i < script.force_windows.size(); ++i) {
+    const ForceWindow& w = script.force_windows[i];
+    const ForceWindowMeasure& m = force_windows[i];
+    AssertionResult a;
+    a.name = "force_window[" + std::to_string(w.from_step) + ", " + std::to_string(w.to_step) + "]";
+    a.where = w.where;
+    std::string limit;
+    if (w.relative_std_max) limit += "deviation <= " + number(100.0 * *w.relative_std_max, "%") + " of the mean";
+    if (w.mean_min_n) limit += std::string(limit.empty() ? "" : ", ") + "mean >= " + number(*w.mean_min_n, "N");
+    if (w.above_previous) limit += std::string(limit.empty() ? "" : ", ") + "mean above the window before";
+    a.limit = limit;
+    if (m.steps == 0) {
+      a.measured = "no steps in the window";
+      a.passed = false;
+    } else {
+      const double mean = m.mean(), deviation = m.deviation();
+      a.measured = "mean " + number(mean, "N") + ", deviation " + number(deviation, "N") + " (" +
+                   number(mean > 0.0 ? 100.0 * deviation / mean : 0.0, "%") + "), from " + number(m.low, "N") + " to " +
+                   number(m.high, "N");
+      a.passed = true;
+      if (w.relative_std_max) a.passed = a.passed && mean > 0.0 && deviation <= *w.relative_std_max * mean;
+      if (w.mean_min_n) a.passed = a.passed && mean >= *w.mean_min_n;
+      if (w.above_previous) a.passed = a.passed && mean > force_windows[i - 1].mean();
     }
     out.push_back(a);
   }

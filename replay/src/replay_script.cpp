@@ -26,7 +26,13 @@ const std::vector<std::string_view> kPathKeys = {"interpolation", "keyframes"};
 const std::vector<std::string_view> kKeyframeKeys = {"at_step", "at_ms", "position"};
 const std::vector<std::string_view> kInterpolations = {"linear", "smooth", "step"};
 const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "position", "rest",
-                                                   "force", "hash"};
+                                                   "motion", "creep", "force", "force_window", "hash"};
+const std::vector<std::string_view> kMotionKeys = {"rms_speed_max_m_s", "kinetic_energy_max_j", "speed_max_m_s",
+                                                   "from_step", "from_ms"};
+const std::vector<std::string_view> kCreepKeys = {"object", "max_m", "from_step", "from_ms", "to_step", "to_ms",
+                                                  "every_steps", "every_ms"};
+const std::vector<std::string_view> kForceWindowKeys = {"from_step", "from_ms", "to_step", "to_ms",
+                                                        "relative_std_max", "mean_min_n", "above_previous"};
 const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p99_us", "compute_max_us",
                                                     "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
                                                     "deadline_misses"};
@@ -565,6 +571,52 @@ class ScriptReader {
       if (script.rest.every_steps == 0) r.fail_here("assert.rest", "'every' must be at least one step");
       if (script.rest.from_step + script.rest.every_steps > script.steps)
         r.fail_here("assert.rest", "the window from 'from' leaves no whole 'every' interval before the end of the run");
+    }
+    if (const toml::table* motion = a.subtable("motion")) {
+      const TableReader m(origin_, *motion, "assert.motion", kMotionKeys);
+      script.motion.rms_speed_max_m_s = optional_number(m, "rms_speed_max_m_s", kPositive);
+      script.motion.kinetic_energy_max_j = optional_number(m, "kinetic_energy_max_j", kPositive);
+      script.motion.speed_max_m_s = optional_number(m, "speed_max_m_s", kPositive);
+      if (!script.motion.rms_speed_max_m_s && !script.motion.kinetic_energy_max_j && !script.motion.speed_max_m_s)
+        m.fail_here("assert.motion", "give 'rms_speed_max_m_s', 'kinetic_energy_max_j' and/or 'speed_max_m_s'");
+      script.motion.from_step = time_of(m, "from", false).value_or(0);
+      if (script.motion.from_step >= script.steps)
+        m.fail_at(m.has("from_ms") ? "from_ms" : "from_step", "starts after the run's last step");
+    }
+    const auto creeps = array_of_tables(a, "creep");
+    for (std::size_t i = 0; i < creeps.size(); ++i) {
+      const std::string path = "assert.creep[" + std::to_string(i) + "]";
+      const TableReader c(origin_, *creeps[i], path, kCreepKeys);
+      CreepLimit creep;
+      creep.where = location(origin_, creeps[i]->source());
+      const auto pattern = c.string("object");
+      if (!pattern) c.fail_missing("object", " (an object name, or a name prefix ending in '*')");
+      creep.pattern = *pattern;
+      creep.objects = objects_matching(c, "object", *pattern);
+      creep.max_m = c.required_number("max_m", kNonNegative, " (m: how far a centre of mass may move)");
+      read_window(c, path, script.steps, creep.from_step, creep.to_step, creep.every_steps);
+      if (creep.from_step % creep.every_steps != 0)
+        c.fail_here(path, "'from' must be a whole number of 'every' intervals (the first sample is taken there)");
+      script.creeps.push_back(creep);
+    }
+    const auto windows = array_of_tables(a, "force_window");
+    for (std::size_t i = 0; i < windows.size(); ++i) {
+      const std::string path = "assert.force_window[" + std::to_string(i) + "]";
+      const TableReader w(origin_, *windows[i], path, kForceWindowKeys);
+      if (!has(model_->settings.effects, Effect::Probe))
+        w.fail_here(path, "force assertions need the \"probe\" effect in the scene");
+      ForceWindow window;
+      window.where = location(origin_, windows[i]->source());
+      std::uint64_t every = 0;
+      read_window(w, path, script.steps, window.from_step, window.to_step, every);
+      if (window.from_step >= window.to_step) w.fail_here(path, "the window holds no step ('from' must be before 'to')");
+      window.relative_std_max = optional_number(w, "relative_std_max", kPositive);
+      window.mean_min_n = optional_number(w, "mean_min_n", kNonNegative);
+      window.above_previous = w.boolean("above_previous", false);
+      if (window.above_previous && i == 0) w.fail_at("above_previous", "the first force window has none before it");
+      if (!window.relative_std_max && !window.mean_min_n && !window.above_previous)
+        w.fail_here(path, "give 'relative_std_max', 'mean_min_n' and/or 'above_previous'");
+      script.force_windows.push_back(window);
     }
     const auto hashes = array_of_tables(a, "hash");
     for (std::size_t i = 0; i < hashes.size(); ++i) {

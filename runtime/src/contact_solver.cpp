@@ -5,6 +5,7 @@
 
 #include "dynamics.h"
 #include "ffd/box_test.h"
+#include "ffd/response.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
 #include "interaction.h"
@@ -19,12 +20,19 @@ namespace {
 // the velocity gravity adds in one step.
 constexpr double kRestingApproach = 0.05;
 
+}  // namespace
+
+const double kSpeculativeDistance = 0.001;
+
+namespace {
+
 // A point carried by cell `cell` at local coordinates `local` (eq. 2).
 ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
   ContactSide side;
   side.node = model.cell_nodes[cell];
   side.weight = trilinear_weights(local);
   side.count = 8;
+  side.cell = cell;
   return side;
 }
 
@@ -34,6 +42,7 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
   side.node = model.cell_nodes[boxes.box_cell[b]];
   side.weight.fill(0.0);
   side.count = 8;
+  side.cell = boxes.box_cell[b];
   for (int i = 0; i < 4; ++i) {
     const std::array<double, 8> w = trilinear_weights(boxes.box_local[b][kBoxFaces[face][i]]);
     for (int j = 0; j < 8; ++j) side.weight[j] += 0.25 * w[j];
@@ -124,12 +133,63 @@ void begin_solver_step(const Model& model, State& state, Scratch& scratch) {
   scratch.grab_lambda = Vec3::Zero();
 }
 
+namespace {
+
+// The plane of box `planes` a node at p is nearest to leaving through, and how far out of it
+// the node lies (< 0: inside, by the least depth of eq. 7). A node is near the box when it is
+// within the margin of every plane; then that face is its contact face.
+struct NearFace {
+  int face = -1;
+  double height = INFINITY;  // signed distance out of the face, m
+};
+NearFace near_face(const BoxPlanes& planes, const Vec3& p, double margin) {
+  NearFace near;
+  if (planes.degenerate) return near;
+  double outmost = -INFINITY;
+  for (int f = 0; f < 6; ++f) {
+    const double height = planes.normal[f].dot(p) - planes.offset[f];
+    if (!(height < margin)) return NearFace{};  // beyond the margin (also rejects NaN)
+    if (height > outmost) {
+      outmost = height;
+      near.face = f;
+    }
+  }
+  near.height = outmost;
+  return near;
+}
+
+bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+                Index container, double margin) {
+  const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+  if (planes.degenerate) return false;
+  const int node_count = tested_node_count(level);
+  for (int k = 0; k < node_count; ++k)
+    if (near_face(planes, tested_node(model, level, state, scratch, mover, k), margin).face >= 0) return true;
+  return false;
+}
+
+}  // namespace
+
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
                        StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
-  find_pair_hits(model, level, state, scratch, counters);  // which pairs hold a node of one box in the other
+  const double margin = kSpeculativeDistance;
+  // Which pairs hold a node of one box in or near the other: read-only, over the pool.
+  constexpr Index kPairsPerChunk = 32;
+  auto detect = [&](std::uint32_t chunk, std::uint32_t) {
+    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
+      const BoxPair& pair = scratch.pairs[p];
+      scratch.pair_hit[p] = nodes_near(model, level, state, scratch, pair.a, pair.b, margin) ||
+                            nodes_near(model, level, state, scratch, pair.b, pair.a, margin);
+    }
+  };
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
+  else
+    for (Index c = 0; c < chunks; ++c) detect(c, 0);
   const int node_count = tested_node_count(level);
+  counters.node_tests += 2 * node_count * pairs;
   const Bodies bodies{model, state, scratch};
   const double recent = kRecentEntrySteps * model.settings.dt;
   // The hits, in pair order, into the contact list.
@@ -151,14 +211,23 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
       for (int k = 0; k < node_count; ++k) {
         const Vec3 node = tested_node(model, level, state, scratch, mover, k);
         const NodeInBox hit = node_in_box(planes, node, relative_velocity, recent);
-        if (!hit.inside) continue;
-        if (self) ++counters.self_contacts;
-        else ++counters.inter_contacts;
-        max_depth = std::max(max_depth, hit.depth);
-        scratch.record_contact(node, planes.normal[hit.face], hit.depth, self ? ContactKind::Self : ContactKind::Inter);
-        add_contact(bodies, scratch, face_point(model, boxes, container, hit.face),
-                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[hit.face],
-                    hit.depth);
+        int face = hit.face;
+        double depth = hit.depth;
+        if (!hit.inside) {
+          // Near, not in: a speculative contact, which holds the node at the face should the
+          // solve move it in, so that a resting contact stays in the list from step to step.
+          const NearFace near = near_face(planes, node, margin);
+          if (near.face < 0) continue;
+          face = near.face;
+          depth = -near.height;
+        } else {
+          if (self) ++counters.self_contacts;
+          else ++counters.inter_contacts;
+          max_depth = std::max(max_depth, depth);
+          scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
+        }
+        add_contact(bodies, scratch, face_point(model, boxes, container, face),
+                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth);
       }
     }
   }
@@ -297,8 +366,8 @@ void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
   const ContactSide side = cell_point(model, grab.cell, grab.local);
   const double w = bodies.weighted_inv_mass(side);
   if (!(w > 0.0)) return;
-  const double dt = model.settings.dt, k = model.settings.grab.stiffness, damping = model.settings.grab.damping;
-  const double alpha_tilde = 1.0 / (k * dt * dt), gamma = damping / (k * dt);
+  const double h = model.settings.dt, k = model.settings.grab.stiffness, damping = model.settings.grab.damping;
+  const double alpha_tilde = 1.0 / (k * h * h), gamma = damping / (k * h);
   const Vec3 p = bodies.point(side);
   const Vec3 moved = p - bodies.point_prev(side);
   const Vec3 d_lambda = (-(p - grab.target) - alpha_tilde * scratch.grab_lambda - gamma * moved) /
@@ -309,42 +378,83 @@ void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
 
 }  // namespace
 
+namespace {
+
+// A contact side's body for eq. 8: its cell (mean velocity of the 8 nodes, the cell's inverse
+// mass), the probe, or nothing (a plane: inverse mass 0, velocity 0).
+struct SideBody {
+  Vec3 v = Vec3::Zero();
+  double inv_mass = 0.0;
+};
+SideBody side_body(const Model& model, const State& state, const Scratch& scratch, const ContactSide& s) {
+  SideBody body;
+  if (s.count == 0) return body;
+  if (s.cell == kNoIndex) return {state.probe.v, 1.0 / model.settings.probe.mass};
+  body.v = mean_velocity(state, model.cell_nodes[s.cell]);
+  body.inv_mass = scratch.object_solving[model.cell_object[s.cell]] ? model.cell_inv_mass[s.cell] : 0.0;
+  return body;
+}
+
+void set_side_velocity(const Model& model, State& state, const ContactSide& s, const SideBody& body,
+                       const Vec3& v_ref, const Vec3& n, double beta, const Vec3& kick) {
+  if (!(body.inv_mass > 0.0)) return;
+  if (s.cell == kNoIndex) {
+    state.probe.v = respond_velocity(state.probe.v, v_ref, n, 1.0, beta) + kick;
+    return;
+  }
+  for (Index i : model.cell_nodes[s.cell]) state.v[i] = respond_velocity(state.v[i], v_ref, n, 1.0, beta) + kick;
+}
+
+// The velocities after the solve, contact by contact in list order, for each contact that
+// pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
+// v_ref, with the normal part taken to the pair's rebound: -(1 - alpha) of the approach the
+// contact was found with (response.h), none for a resting contact. The tangential part keeps
+// 1 - beta. So alpha and beta mean what they mean in the paper, and a position correction of
+// the solve never leaves as metres per second (v = dx / dt of a millimetre is 1 m/s).
+void answer_velocities(const Model& model, State& state, const Scratch& scratch, double beta) {
+  const double alpha = state.params.alpha;
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
+    const SideBody a = side_body(model, state, scratch, c.a), b = side_body(model, state, scratch, c.b);
+    const PositionShares share = position_shares(a.inv_mass, b.inv_mass);
+    if (!(share.a + share.b > 0.0)) continue;
+    // v_ref: the mass-weighted mean; a static side's velocity (zero) where there is one.
+    Vec3 v_ref = a.inv_mass > 0.0 ? b.v : a.v;
+    if (a.inv_mass > 0.0 && b.inv_mass > 0.0) v_ref = (a.v / a.inv_mass + b.v / b.inv_mass) / (1.0 / a.inv_mass + 1.0 / b.inv_mass);
+    const double bounce = c.approach < -kRestingApproach ? -(1.0 - alpha) * c.approach : 0.0;  // m/s, >= 0
+    set_side_velocity(model, state, c.a, a, v_ref, c.normal, beta, -share.a * bounce * c.normal);
+    set_side_velocity(model, state, c.b, b, v_ref, c.normal, beta, share.b * bounce * c.normal);
+  }
+}
+
+}  // namespace
+
 void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   const Bodies bodies{model, state, scratch};
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     ContactConstraint& c = scratch.constraints[i];
     c.inv_mass = bodies.weighted_inv_mass(c.a) + bodies.weighted_inv_mass(c.b);
   }
-  const double mu = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
+  const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
   const bool grabbing = has(model.settings.effects, Effect::Grab) && state.grab.active;
   if (grabbing) wake(state, model.cell_object[state.grab.cell]);  // solved from the next step if asleep now
   const int iterations = dynamics_iterations(model);
   for (int it = 0; it < iterations; ++it) {
     sweep_dynamics(model, it, state, scratch);
-    project_contacts(bodies, scratch, mu);
+    project_contacts(bodies, scratch, beta);  // Coulomb, mu = beta
     if (grabbing) project_grab(model, bodies, scratch);
   }
   finish_dynamics(model, state, scratch);
   const double dt = model.settings.dt;
-  if (has(model.settings.effects, Effect::Probe)) state.probe.v = (state.probe.x - scratch.probe_x_prev) / dt;
-  // Velocities: each contact that pushed leaves its points' normal velocity at the rebound
-  // 1 - alpha of its approach (none for a resting contact), not at what its position
-  // correction would make of it (the corrections of a step, divided by dt, are metres per
-  // second): eq. 8's damping, applied once the positions are solved.
-  const double restitution = 1.0 - state.params.alpha;
-  for (Index i = 0; i < scratch.constraint_count; ++i) {
-    const ContactConstraint& c = scratch.constraints[i];
-    if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
-    const double u = c.normal.dot(bodies.velocity(c.b) - bodies.velocity(c.a));
-    const double target = c.approach < -kRestingApproach ? -restitution * c.approach : 0.0;
-    const double dv = (target - u) / c.inv_mass;
-    bodies.push(c.b, dv * c.normal);
-    bodies.push(c.a, -dv * c.normal);
-  }
   if (has(model.settings.effects, Effect::Probe)) {
-    const ProbeState& probe = state.probe;
-    state.probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
-                        model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
+    ProbeState& probe = state.probe;
+    probe.v = (probe.x - scratch.probe_x_prev) / dt;
+    answer_velocities(model, state, scratch, beta);
+    probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
+                  model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
+  } else {
+    answer_velocities(model, state, scratch, beta);
   }
   if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
 }

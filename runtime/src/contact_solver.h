@@ -19,6 +19,10 @@
 
 namespace ffd {
 
+// How far outside a box face (m) a node still gets a contact: a speculative one, inactive
+// unless the solve would move the node in. The broad phase grows the boxes by as much.
+extern const double kSpeculativeDistance;
+
 void begin_solver_step(const Model& model, State& state, Scratch& scratch);
 
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,

@@ -33,10 +33,18 @@ void wait_until(std::int64_t deadline_ns, std::int64_t spin_ns) {
   }
 }
 
-double max_speed(const State& state) {
-  double fastest = 0.0;
-  for (const Vec3& v : state.v) fastest = std::max(fastest, v.squaredNorm());
-  return std::sqrt(fastest);
+// The lattice nodes' fastest and RMS speeds (m/s) and kinetic energy (J), in one pass.
+void node_motion(const Model& model, const State& state, Telemetry& t) {
+  double fastest = 0.0, sum_sq = 0.0, kinetic = 0.0;
+  for (std::size_t n = 0; n < state.v.size(); ++n) {
+    const double v_sq = state.v[n].squaredNorm();
+    fastest = std::max(fastest, v_sq);
+    sum_sq += v_sq;
+    kinetic += model.node_mass[n] * v_sq;
+  }
+  t.max_speed_m_s = std::sqrt(fastest);
+  t.rms_speed_m_s = state.v.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(state.v.size()));
+  t.kinetic_energy_j = 0.5 * kinetic;
 }
 
 std::uint32_t total_contacts(const StepReport& report) {
@@ -258,7 +266,7 @@ void PhysicsLoop::Impl::take_step(std::int64_t release_ns, std::int64_t wake_ns)
   Telemetry t;
   t.step = state.step;
   t.finite = report.finite;
-  t.max_speed_m_s = max_speed(state);
+  node_motion(model, state, t);
   t.max_penetration_m = report.max_box_penetration_m;
   t.probe_position = state.probe.x;
   t.probe_force_n = state.probe.force;

@@ -386,3 +386,113 @@ TEST_CASE("Replay scripts: a response event reads, a recording writes it back, a
   CHECK_THROWS_WITH(parse(script_with("[[event]]\nat_ms = 20\nresponse = \"fast\"\n")),
                     Contains("test.toml:6:12: event[0].response: unknown response 'fast'"));
 }
+
+namespace {
+
+const AssertionResult* find_assertion(const ReplayResult& result, const std::string& prefix) {
+  for (const AssertionResult& a : result.assertions)
+    if (a.name.rfind(prefix, 0) == 0) return &a;
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("Replay scripts: motion, creep and force-window assertions measure what a hand feels, and fail past their limits") {
+  // The probe-and-grab boxes under the response "solver": the upper box lands on the lower one
+  // by 0.4 s and both rest; by 0.7 s the probe presses on the upper box and holds, its device
+  // 2 then 4 cm past where the proxy stops (the coupling stretched: a steady force that rises).
+  const std::string body = R"(
+[[event]]
+at_step = 0
+response = "solver"
+[[probe_path]]
+interpolation = "smooth"
+keyframes = [
+  { at_step = 0, position = [0.02, 0.4, 0.0] },
+  { at_step = 700, position = [0.02, 0.19, 0.0] },
+  { at_step = 800, position = [0.02, 0.19, 0.0] },
+  { at_step = 900, position = [0.02, 0.17, 0.0] },
+  { at_step = 1199, position = [0.02, 0.17, 0.0] },
+]
+)";
+  auto run = [&](const std::string& asserts) {
+    const LoadedReplay replay = parse("version = 1\nscene = \"" + kScene + "\"\nsteps = 1200\n" + body + asserts);
+    return run_replay(replay, ReplayRunOptions{});
+  };
+  const std::string met = R"(
+[assert.motion]
+from_step = 500
+rms_speed_max_m_s = 0.05
+kinetic_energy_max_j = 0.01
+speed_max_m_s = 0.5
+[[assert.creep]]
+object = "low"
+from_step = 500
+to_step = 1200
+every_steps = 50
+max_m = 0.002
+[[assert.force_window]]
+from_step = 750
+to_step = 800
+mean_min_n = 0.5
+[[assert.force_window]]
+from_step = 1000
+to_step = 1200
+relative_std_max = 0.05
+above_previous = true
+)";
+  const ReplayResult passed = run(met);
+  INFO(format_replay_result(parse("version = 1\nscene = \"" + kScene + "\"\nsteps = 1200\n" + body + met).script, passed));
+  CHECK(passed.passed());
+  REQUIRE(find_assertion(passed, "motion.rms_speed_max_m_s"));
+  REQUIRE(find_assertion(passed, "creep[low]"));
+  REQUIRE(find_assertion(passed, "force_window[1000, 1200]"));
+
+  // Limits the run does not meet: each fails and says what it measured.
+  const ReplayResult failed = run(R"(
+[assert.motion]
+from_step = 0
+rms_speed_max_m_s = 0.001
+[[assert.creep]]
+object = "high"
+from_step = 0
+to_step = 600
+every_steps = 50
+max_m = 0.01
+[[assert.force_window]]
+from_step = 1000
+to_step = 1200
+mean_min_n = 100.0
+)");
+  CHECK_FALSE(failed.passed());
+  const AssertionResult* motion = find_assertion(failed, "motion.rms_speed_max_m_s");
+  const AssertionResult* creep = find_assertion(failed, "creep[high]");
+  const AssertionResult* force = find_assertion(failed, "force_window[1000, 1200]");
+  REQUIRE(motion);
+  REQUIRE(creep);
+  REQUIRE(force);
+  CHECK_FALSE(motion->passed);  // the fall
+  CHECK_FALSE(creep->passed);   // the upper box falls 5 cm
+  CHECK_THAT(creep->measured, Contains("high"));
+  CHECK_FALSE(force->passed);
+  CHECK_THAT(force->measured, Contains("mean"));
+}
+
+TEST_CASE("Replay scripts: malformed motion, creep and force-window assertions name the file, line and field") {
+  CHECK_THROWS_WITH(parse(script_with("[assert.motion]\nfrom_step = 10\n")),
+                    Contains("assert.motion: give 'rms_speed_max_m_s', 'kinetic_energy_max_j' and/or 'speed_max_m_s'"));
+  CHECK_THROWS_WITH(parse(script_with("[assert.motion]\nfrom_step = 500\nspeed_max_m_s = 1.0\n")),
+                    Contains("assert.motion.from_step: starts after the run's last step"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.creep]]\nobject = \"low\"\n")),
+                    Contains("assert.creep[0].max_m: missing required key"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.creep]]\nobject = \"nobody\"\nmax_m = 0.001\n")),
+                    Contains("assert.creep[0].object"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.creep]]\nobject = \"low\"\nmax_m = 0.001\nfrom_step = 15\n")),
+                    Contains("'from' must be a whole number of 'every' intervals"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 10\nto_step = 20\nabove_previous = true\n")),
+                    Contains("assert.force_window[0].above_previous: the first force window has none before it"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 20\nto_step = 20\nmean_min_n = 1.0\n")),
+                    Contains("the window holds no step"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 10\nto_step = 20\n")),
+                    Contains("give 'relative_std_max', 'mean_min_n' and/or 'above_previous'"));
+}

@@ -85,6 +85,37 @@ struct RestLimit {
   std::uint64_t every_steps = 10;
 };
 
+// What a hand feels at rest: from `from_step` on, every step, the lattice nodes' RMS speed,
+// their kinetic energy and the fastest node stay below these.
+struct MotionLimits {
+  std::optional<double> rms_speed_max_m_s;
+  std::optional<double> kinetic_energy_max_j;
+  std::optional<double> speed_max_m_s;
+  std::uint64_t from_step = 0;
+};
+
+// Creep: from `from_step` to `to_step`, sampled every `every_steps`, no named object's centre
+// of mass gets farther than `max_m` from where it was at `from_step`.
+struct CreepLimit {
+  std::string where;
+  std::string pattern;
+  std::vector<Index> objects;
+  double max_m = 0.0;
+  std::uint64_t from_step = 0, to_step = 0;
+  std::uint64_t every_steps = 10;
+};
+
+// The probe's force output |F| over the steps (from_step, to_step]: steady (standard deviation
+// at most `relative_std_max` of the mean), at least `mean_min_n` on average, and, with
+// `above_previous`, a larger mean than the force window before it in the script.
+struct ForceWindow {
+  std::string where;
+  std::uint64_t from_step = 0, to_step = 0;
+  std::optional<double> relative_std_max;
+  std::optional<double> mean_min_n;
+  bool above_previous = false;
+};
+
 struct ForceLimits {  // the probe's force output, N
   std::optional<double> max_n;       // |F| never above
   std::optional<double> peak_min_n;  // |F| reached at least this once (the probe touched)
@@ -137,7 +168,10 @@ struct ReplayScript {
   std::vector<GapLimit> gaps;
   std::vector<PositionLimit> positions;
   RestLimit rest;
+  MotionLimits motion;
+  std::vector<CreepLimit> creeps;
   ForceLimits force;
+  std::vector<ForceWindow> force_windows;
   std::vector<HashCheck> hashes;     // ordered by step
   std::optional<RecordedOrigin> recorded;  // a recording's origin (none: a hand-written script)
   // What the reader let pass with a note (a recording cut off mid-write), file:line: text.

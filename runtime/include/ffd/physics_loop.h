@@ -76,6 +76,8 @@ struct Telemetry {
   std::uint64_t state_hash = 0;   // of the State after this step, when has_hash
   double energy_j = 0.0;          // kinetic + gravitational + elastic, when has_energy
   double max_speed_m_s = 0.0;     // fastest lattice node
+  double rms_speed_m_s = 0.0;     // root mean square of the lattice nodes' speeds
+  double kinetic_energy_j = 0.0;  // of the lattice nodes
   double max_penetration_m = 0.0; // deepest node-in-box / below-plane / probe depth found this step
   Vec3 probe_position = Vec3::Zero();  // m
   Vec3 probe_force_n = Vec3::Zero();   // force output on the device

@@ -55,6 +55,7 @@ struct ContactSide {
   std::array<Index, 8> node;
   std::array<double, 8> weight;
   std::uint8_t count = 0;  // node[0 .. count) carry the point
+  Index cell = kNoIndex;   // the lattice cell whose 8 nodes these are (none: the probe, a plane)
 };
 struct ContactConstraint {
   ContactSide a, b;
