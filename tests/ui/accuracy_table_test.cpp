@@ -3,6 +3,7 @@
 #include "bench/accuracy_table.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include "ffd/measure.h"
 #include "support/test_scenes.h"
@@ -67,4 +68,28 @@ TEST_CASE("Accuracy table: levels 2, 3 and 5 of a scene get their comparison lin
   // Without a level 3 run, no level 3 line.
   const std::string without = ffdbench::markdown_accuracy({runs[0], runs[2]}, "test CPU", 3000);
   CHECK_THAT(without, !Catch::Contains("Level 3 (surface nodes)"));
+}
+
+TEST_CASE("Accuracy table: each response gets its rows and its own comparison lines") {
+  auto run = [](Accuracy level, ContactResponse response, double collision_ms) {
+    ffdbench::AccuracyRun r;
+    r.scene = "teapots";
+    r.level = level;
+    r.response = response;
+    r.rest_samples = 1;
+    r.collision_p50_ms = collision_ms;
+    return r;
+  };
+  const std::vector<ffdbench::AccuracyRun> runs = {run(Accuracy::CentreOfMass, ContactResponse::Paper, 0.3),
+                                                   run(Accuracy::Exact, ContactResponse::Paper, 0.9),
+                                                   run(Accuracy::CentreOfMass, ContactResponse::Solver, 0.2),
+                                                   run(Accuracy::Exact, ContactResponse::Solver, 1.0)};
+  const std::string table = ffdbench::markdown_accuracy(runs, "test CPU", 3000);
+  CHECK_THAT(table, Catch::Contains("| level | response | collision ms p50 |"));
+  CHECK_THAT(table, Catch::Contains("| 2 FFD AABB + centre of mass | paper | 0.300 |"));
+  CHECK_THAT(table, Catch::Contains("| 2 FFD AABB + centre of mass | solver | 0.200 |"));
+  CHECK_THAT(table, Catch::Contains("Level 2 (the paper's) against level 5 (exact): 3.0x cheaper per step"));
+  CHECK_THAT(table, Catch::Contains("Level 2 (the paper's) against level 5 (exact) (response solver): 5.0x cheaper per step"));
+  const nlohmann::json json = ffdbench::to_json(runs);
+  CHECK(json[2]["response"] == "solver");
 }

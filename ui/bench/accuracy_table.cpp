@@ -43,17 +43,21 @@ double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::
 }
 
 AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
-                         std::uint64_t sample_every, const Progress& progress, int threads) {
+                         std::uint64_t sample_every, const Progress& progress, int threads, ffd::ContactResponse response) {
   AccuracyRun run;
   run.scene = scene;
   run.level = level;
+  run.response = response;
   run.steps = steps;
   ffd::State state = ffd::initial_state(model);
   const ffd::State initial = state;
-  // The level is switched as a command would switch it: the same path a user takes.
+  // The level and the response are switched as commands would switch them: the path a user takes.
   ffd::Command command;
   command.kind = ffd::CommandKind::SetAccuracy;
   command.value = static_cast<double>(level);
+  ffd::apply_command(model, initial, state, command);
+  command.kind = ffd::CommandKind::SetResponse;
+  command.value = static_cast<double>(response);
   ffd::apply_command(model, initial, state, command);
   ffd::Scratch scratch = ffd::make_scratch(model);
   ffd::WorkerPool pool(threads);
@@ -62,7 +66,7 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
   std::vector<double> collision_ms, step_ms, gaps, penetrations, penetrating;
   collision_ms.reserve(steps);
   step_ms.reserve(steps);
-  const std::string what = scene + ": level " + std::to_string(static_cast<int>(level));
+  const std::string what = scene + ": level " + std::to_string(static_cast<int>(level)) + ", " + ffd::response_name(response);
   const std::uint64_t report_every = std::max<std::uint64_t>(1, steps / 100);
   for (std::uint64_t i = 1; i <= steps; ++i) {
     ffd::step(model, state, scratch, report);
@@ -97,9 +101,10 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
 
 namespace {
 
-const AccuracyRun* find_run(const std::vector<AccuracyRun>& runs, const std::string& scene, ffd::Accuracy level) {
+const AccuracyRun* find_run(const std::vector<AccuracyRun>& runs, const std::string& scene, ffd::Accuracy level,
+                            ffd::ContactResponse response) {
   for (const AccuracyRun& r : runs)
-    if (r.scene == scene && r.level == level) return &r;
+    if (r.scene == scene && r.level == level && r.response == response) return &r;
   return nullptr;
 }
 
@@ -121,33 +126,42 @@ std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::s
        "per step. Gap, penetration and penetrating vertices are measured on the exact embedded surfaces every 50 ms "
        "over the second half of the run. Gap: the widest gap between an object at rest (RMS speed of its lattice "
        "nodes below 5 cm/s) and the surface or floor it rests on; penetration: the deepest pair; penetrating vertices: "
-       "summed over the pairs. Mean and max over the samples.\n\n";
+       "summed over the pairs. Mean and max over the samples. Response: how the contacts were answered (paper: at "
+       "once by eq. 7-9; solver: as constraints with the springs, whose time is then in the step, not in the "
+       "collision column).\n\n";
   for (const std::string& scene : scenes_of(runs)) {
     s << "**" << scene << "**\n\n"
-      << "| level | collision ms p50 | p99 | step ms p50 | gap mm mean | max | penetration mm mean | max | "
+      << "| level | response | collision ms p50 | p99 | step ms p50 | gap mm mean | max | penetration mm mean | max | "
          "penetrating vertices mean | max |\n"
-      << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+      << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const AccuracyRun& r : runs) {
       if (r.scene != scene) continue;
       s << "| " << static_cast<int>(r.level) << " " << ffd::accuracy_name(r.level) << (r.finite ? "" : " (NOT FINITE)")
-        << " | " << fixed(r.collision_p50_ms, 3) << " | " << fixed(r.collision_p99_ms, 3) << " | "
+        << " | " << ffd::response_name(r.response) << " | " << fixed(r.collision_p50_ms, 3) << " | " << fixed(r.collision_p99_ms, 3) << " | "
         << fixed(r.step_p50_ms, 2) << " | " << (r.rest_samples ? fixed(r.gap_mean_mm, 2) : "none at rest") << " | "
         << (r.rest_samples ? fixed(r.gap_max_mm, 2) : "-") << " | "
         << fixed(r.penetration_mean_mm, 2) << " | " << fixed(r.penetration_max_mm, 2) << " | "
         << fixed(r.penetrating_vertices_mean, 0) << " | " << r.penetrating_vertices_max << " |\n";
     }
-    const AccuracyRun* paper = find_run(runs, scene, ffd::Accuracy::CentreOfMass);
-    const AccuracyRun* exact = find_run(runs, scene, ffd::Accuracy::Exact);
-    if (paper && exact && paper->collision_p50_ms > 0.0) {
-      s << "\nLevel 2 (the paper's) against level 5 (exact): " << fixed(exact->collision_p50_ms / paper->collision_p50_ms, 1)
-        << "x cheaper per step; gap max " << gap_text(*paper) << " vs " << gap_text(*exact) << "; penetration max " << fixed(paper->penetration_max_mm, 2) << " mm vs "
-        << fixed(exact->penetration_max_mm, 2) << " mm.\n";
-    }
-    const AccuracyRun* surface = find_run(runs, scene, ffd::Accuracy::SampleNodes);
-    if (paper && surface && paper->collision_p50_ms > 0.0) {
-      s << "\nLevel 3 (surface nodes) against level 2: " << fixed(surface->collision_p50_ms / paper->collision_p50_ms, 2)
-        << "x the collision time; gap max " << gap_text(*surface) << " vs " << gap_text(*paper) << "; penetration max "
-        << fixed(surface->penetration_max_mm, 2) << " mm vs " << fixed(paper->penetration_max_mm, 2) << " mm.\n";
+    for (const ffd::ContactResponse response : {ffd::ContactResponse::Paper, ffd::ContactResponse::Solver}) {
+      // Under the response "paper" the lines read as they always did; under "solver" they say so.
+      const std::string under =
+          response == ffd::ContactResponse::Paper ? "" : std::string(" (response ") + ffd::response_name(response) + ")";
+      const AccuracyRun* paper = find_run(runs, scene, ffd::Accuracy::CentreOfMass, response);
+      const AccuracyRun* exact = find_run(runs, scene, ffd::Accuracy::Exact, response);
+      if (paper && exact && paper->collision_p50_ms > 0.0) {
+        s << "\nLevel 2 (the paper's) against level 5 (exact)" << under << ": "
+          << fixed(exact->collision_p50_ms / paper->collision_p50_ms, 1) << "x cheaper per step; gap max "
+          << gap_text(*paper) << " vs " << gap_text(*exact) << "; penetration max " << fixed(paper->penetration_max_mm, 2)
+          << " mm vs " << fixed(exact->penetration_max_mm, 2) << " mm.\n";
+      }
+      const AccuracyRun* surface = find_run(runs, scene, ffd::Accuracy::SampleNodes, response);
+      if (paper && surface && paper->collision_p50_ms > 0.0) {
+        s << "\nLevel 3 (surface nodes) against level 2" << under << ": "
+          << fixed(surface->collision_p50_ms / paper->collision_p50_ms, 2) << "x the collision time; gap max "
+          << gap_text(*surface) << " vs " << gap_text(*paper) << "; penetration max "
+          << fixed(surface->penetration_max_mm, 2) << " mm vs " << fixed(paper->penetration_max_mm, 2) << " mm.\n";
+      }
     }
     s << "\n";
   }
@@ -160,6 +174,7 @@ nlohmann::json to_json(const std::vector<AccuracyRun>& runs) {
     out.push_back({{"scene", r.scene},
                    {"level", static_cast<int>(r.level)},
                    {"level_name", ffd::accuracy_name(r.level)},
+                   {"response", ffd::response_name(r.response)},
                    {"steps", r.steps},
                    {"samples", r.samples},
                    {"rest_samples", r.rest_samples},
@@ -191,10 +206,20 @@ std::string gnuplot_script(const std::vector<AccuracyRun>& runs, const std::stri
     const bool gap = std::string(panel[0]) == "gap";
     // A level where nothing came to rest has no gap to show.
     auto shown = [gap](const AccuracyRun& r) { return !gap || r.rest_samples > 0; };
-    std::vector<std::string> scenes;
+    // A series per scene and response.
+    struct Series {
+      std::string scene;
+      ffd::ContactResponse response;
+    };
+    std::vector<Series> scenes;
     for (const std::string& scene : scenes_of(runs))
-      if (std::any_of(runs.begin(), runs.end(), [&](const AccuracyRun& r) { return r.scene == scene && shown(r); }))
-        scenes.push_back(scene);
+      for (const ffd::ContactResponse response : {ffd::ContactResponse::Paper, ffd::ContactResponse::Solver})
+        if (std::any_of(runs.begin(), runs.end(),
+                        [&](const AccuracyRun& r) { return r.scene == scene && r.response == response && shown(r); }))
+          scenes.push_back({scene, response});
+    const bool both = std::any_of(runs.begin(), runs.end(), [](const AccuracyRun& r) {
+      return r.response != ffd::ContactResponse::Paper;
+    });
     s << "set ylabel '" << panel[1] << "'\n";
     if (scenes.empty()) {
       s << "set label 1 'nothing came to rest' at graph 0.5, 0.5 center\nplot [1:10] [0:1] NaN notitle\nunset label 1\n";
@@ -202,14 +227,16 @@ std::string gnuplot_script(const std::vector<AccuracyRun>& runs, const std::stri
     }
     s << "plot ";
     for (std::size_t i = 0; i < scenes.size(); ++i) {
-      s << (i ? ", " : "") << "'-' using 1:2 with points pt 7 ps 1.3 lc " << i + 1 << " title '" << scenes[i]
+      const std::string title =
+          both ? scenes[i].scene + ", " + ffd::response_name(scenes[i].response) : scenes[i].scene;
+      s << (i ? ", " : "") << "'-' using 1:2 with points pt 7 ps 1.3 lc " << i + 1 << " title '" << title
         << "', '-' using 1:2:3 with labels offset 0.8,0.8 tc lt " << i + 1 << " notitle";
     }
     s << "\n";
-    for (const std::string& scene : scenes)
+    for (const Series& series : scenes)
       for (int copy = 0; copy < 2; ++copy) {
         for (const AccuracyRun& r : runs) {
-          if (r.scene != scene || !shown(r)) continue;
+          if (r.scene != series.scene || r.response != series.response || !shown(r)) continue;
           const double y = gap ? r.gap_max_mm : r.penetration_max_mm;
           s << std::max(r.collision_p50_ms, 1e-3) << " " << y << " " << static_cast<int>(r.level) << "\n";
         }

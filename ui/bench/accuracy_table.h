@@ -18,6 +18,7 @@ namespace ffdbench {
 struct AccuracyRun {
   std::string scene;  // the scene's name
   ffd::Accuracy level = ffd::Accuracy::CentreOfMass;
+  ffd::ContactResponse response = ffd::ContactResponse::Paper;  // how the contacts were answered
   std::uint64_t steps = 0;
   std::uint64_t samples = 0;       // surface samples over the second half of the run
   std::uint64_t rest_samples = 0;  // of those, the ones where some object was at rest
@@ -40,12 +41,14 @@ struct AccuracyRun {
 // it does rest on, so that neighbour does not count.
 double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::SurfaceContactReport& contacts);
 
-// Runs `model` for `steps` steps at `level` on `threads` threads; samples the surfaces every
-// `sample_every` steps over the second half.
+// Runs `model` for `steps` steps at `level` under `response` on `threads` threads; samples the
+// surfaces every `sample_every` steps over the second half.
 AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd::Accuracy level, std::uint64_t steps,
-                         std::uint64_t sample_every, const Progress& progress, int threads = 1);
+                         std::uint64_t sample_every, const Progress& progress, int threads = 1,
+                         ffd::ContactResponse response = ffd::ContactResponse::Paper);
 
-// Markdown: one table per scene, and a line per scene on what level 2 costs against level 5.
+// Markdown: one table per scene (a row per response and level), and lines per scene and
+// response on what level 2 costs against levels 3 and 5.
 std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::string& cpu, std::uint64_t steps);
 nlohmann::json to_json(const std::vector<AccuracyRun>& runs);
 

@@ -23,6 +23,9 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
       ->check(CLI::Range(20, 1'000'000))
       ->capture_default_str();
   cmd->add_option("--levels", o.levels, "Levels to run (default: 0 1 2 3 4 5)")->check(CLI::Range(0, ffd::kAccuracyLevels - 1));
+  cmd->add_option("--responses", o.responses, "Contact responses to run each level under (paper, solver)")
+      ->check(CLI::IsMember({"paper", "solver"}))
+      ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Folder for accuracy.md, accuracy.json, accuracy.gp and accuracy.png")
       ->capture_default_str();
   cmd->add_option("--update-readme", o.readme, "Also replace the <!-- accuracy:table:begin --> section of this file");
@@ -55,16 +58,21 @@ int run_accuracy_command(const AccuracyOptions& o) {
       std::vector<std::string> log;
       const ffd::Model model = ffd::compile_scene(spec, file, log);
       const std::string name = spec.name.empty() ? std::filesystem::path(file).stem().string() : spec.name;
-      for (int level : levels) {
-        runs.push_back(ffdbench::run_accuracy(model, name, static_cast<ffd::Accuracy>(level), o.steps, 50, std::ref(progress),
-                                              thread_count(o.threads)));
-        const ffdbench::AccuracyRun& r = runs.back();
-        finite = finite && r.finite;
-        char line[256];
-        std::snprintf(line, sizeof line, "%s level %d: collision %.3f ms p50; gap max %.2f mm; penetration max %.2f mm%s",
-                      name.c_str(), level, r.collision_p50_ms, r.gap_max_mm, r.penetration_max_mm,
-                      r.finite ? "" : "; NOT FINITE");
-        progress.finish_line(line);
+      for (const std::string& response_text : o.responses) {
+        ffd::ContactResponse response = ffd::ContactResponse::Paper;
+        ffd::response_from_name(response_text, response);  // checked by the option
+        for (int level : levels) {
+          runs.push_back(ffdbench::run_accuracy(model, name, static_cast<ffd::Accuracy>(level), o.steps, 50,
+                                                std::ref(progress), thread_count(o.threads), response));
+          const ffdbench::AccuracyRun& r = runs.back();
+          finite = finite && r.finite;
+          char line[256];
+          std::snprintf(line, sizeof line,
+                        "%s level %d, %s: collision %.3f ms p50; gap max %.2f mm; penetration max %.2f mm%s", name.c_str(),
+                        level, response_text.c_str(), r.collision_p50_ms, r.gap_max_mm, r.penetration_max_mm,
+                        r.finite ? "" : "; NOT FINITE");
+          progress.finish_line(line);
+        }
       }
     }
 

@@ -85,6 +85,7 @@ struct AccuracyOptions {
   std::vector<std::string> scenes;  // empty: the two teapots and the five soft bunnies
   std::uint64_t steps = 3000;
   std::vector<int> levels;          // empty: all
+  std::vector<std::string> responses = {"paper", "solver"};  // contact responses (spec.h)
   std::string out_dir = "out/accuracy";
   std::string readme;               // Markdown file whose accuracy section is replaced
   std::string plot;                 // where the PNG is also copied
