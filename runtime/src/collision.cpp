@@ -52,9 +52,7 @@ void update_boxes(const Model&, const BoxSet& boxes, const State& state, Scratch
   auto run = [&](std::uint32_t chunk, std::uint32_t) {
     update_box_blocks(boxes, chunk * kBlocksPerChunk, std::min(blocks, (chunk + 1) * kBlocksPerChunk), x, out);
   };
-  if (scratch.pool) scratch.pool->parallel_for(chunks, run);
-  else
-    for (Index c = 0; c < chunks; ++c) run(c, 0);
+  parallel_for(scratch.pool, chunks, run);
 }
 
 void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell) {
@@ -439,15 +437,13 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
 
 }  // namespace
 
-// Whether a tested node of `mover` lies inside `container` (read-only: the detection half of
-// test_nodes).
-bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
-                  Index container) {
+bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+                Index container, double margin) {
   const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
   if (planes.degenerate) return false;
   const int node_count = tested_node_count(level);
   for (int k = 0; k < node_count; ++k)
-    if (node_in_box(planes, tested_node(model, level, state, scratch, mover, k)).inside) return true;
+    if (near_face(planes, tested_node(model, level, state, scratch, mover, k), margin).face >= 0) return true;
   return false;
 }
 
@@ -583,7 +579,7 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
 }  // namespace
 
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
-                    StageCounters& counters) {
+                    StageCounters& counters, double margin) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
   // (A pair of two sleepers is not looked at; should one of them wake before its turn, it is
@@ -594,14 +590,12 @@ void find_pair_hits(const Model& model, const BoxLevel& level, const State& stat
       const BoxPair& pair = scratch.pairs[p];
       const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
       scratch.pair_hit[p] = (state.asleep[o1] && state.asleep[o2]) ||
-                            nodes_inside(model, level, state, scratch, pair.a, pair.b) ||
-                            nodes_inside(model, level, state, scratch, pair.b, pair.a);
+                            nodes_near(model, level, state, scratch, pair.a, pair.b, margin) ||
+                            nodes_near(model, level, state, scratch, pair.b, pair.a, margin);
     }
   };
   const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
-  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
-  else
-    for (Index c = 0; c < chunks; ++c) detect(c, 0);
+  parallel_for(scratch.pool, chunks, detect);
   counters.node_tests += 2 * tested_node_count(level) * pairs;
 }
 
@@ -617,7 +611,7 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
   const int threads = scratch.pool ? scratch.pool->threads() : 1;
   const bool detecting = threads > 1 && scratch.narrow_retested_share < 1.0 - 1.0 / threads;
   if (detecting) {
-    find_pair_hits(model, level, state, scratch, counters);
+    find_pair_hits(model, level, state, scratch, counters, 0.0);
   } else {
     std::fill(scratch.pair_hit.begin(), scratch.pair_hit.begin() + pairs, std::uint8_t{1});
   }

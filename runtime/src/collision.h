@@ -39,15 +39,17 @@ Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, 
 int tested_node_count(const BoxLevel& level);
 const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b, int k);
 
-// Whether a tested node of box `mover` lies inside box `container` (read-only).
-bool nodes_inside(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
-                  Index container);
+// Whether a tested node of box `mover` lies inside box `container` grown by `margin` (m;
+// 0: inside the box itself). Read-only.
+bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+                Index container, double margin);
 
 // The narrow phase's detection, read-only and over the pool: Scratch::pair_hit[p] for each
-// candidate pair, whether a tested node of one box lies inside the other (or both objects
-// sleep: such a pair is looked at when its turn comes). Counts the node tests.
+// candidate pair, whether a tested node of one box lies inside the other grown by `margin`
+// (the paper's response: 0; the solver's: its speculative distance), or both objects sleep
+// (such a pair is looked at when its turn comes). Counts the node tests.
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
-                    StageCounters& counters);
+                    StageCounters& counters, double margin);
 
 // Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
 Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);

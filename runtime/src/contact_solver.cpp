@@ -133,63 +133,13 @@ void begin_solver_step(const Model& model, State& state, Scratch& scratch) {
   scratch.grab_lambda = Vec3::Zero();
 }
 
-namespace {
-
-// The plane of box `planes` a node at p is nearest to leaving through, and how far out of it
-// the node lies (< 0: inside, by the least depth of eq. 7). A node is near the box when it is
-// within the margin of every plane; then that face is its contact face.
-struct NearFace {
-  int face = -1;
-  double height = INFINITY;  // signed distance out of the face, m
-};
-NearFace near_face(const BoxPlanes& planes, const Vec3& p, double margin) {
-  NearFace near;
-  if (planes.degenerate) return near;
-  double outmost = -INFINITY;
-  for (int f = 0; f < 6; ++f) {
-    const double height = planes.normal[f].dot(p) - planes.offset[f];
-    if (!(height < margin)) return NearFace{};  // beyond the margin (also rejects NaN)
-    if (height > outmost) {
-      outmost = height;
-      near.face = f;
-    }
-  }
-  near.height = outmost;
-  return near;
-}
-
-bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
-                Index container, double margin) {
-  const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
-  if (planes.degenerate) return false;
-  const int node_count = tested_node_count(level);
-  for (int k = 0; k < node_count; ++k)
-    if (near_face(planes, tested_node(model, level, state, scratch, mover, k), margin).face >= 0) return true;
-  return false;
-}
-
-}  // namespace
-
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
                        StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
   const double margin = kSpeculativeDistance;
-  // Which pairs hold a node of one box in or near the other: read-only, over the pool.
-  constexpr Index kPairsPerChunk = 32;
-  auto detect = [&](std::uint32_t chunk, std::uint32_t) {
-    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
-      const BoxPair& pair = scratch.pairs[p];
-      scratch.pair_hit[p] = nodes_near(model, level, state, scratch, pair.a, pair.b, margin) ||
-                            nodes_near(model, level, state, scratch, pair.b, pair.a, margin);
-    }
-  };
-  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
-  if (scratch.pool) scratch.pool->parallel_for(chunks, detect);
-  else
-    for (Index c = 0; c < chunks; ++c) detect(c, 0);
+  find_pair_hits(model, level, state, scratch, counters, margin);  // which pairs hold a node of one box in or near the other
   const int node_count = tested_node_count(level);
-  counters.node_tests += 2 * node_count * pairs;
   const Bodies bodies{model, state, scratch};
   const double recent = kRecentEntrySteps * model.settings.dt;
   // The hits, in pair order, into the contact list.

@@ -180,9 +180,7 @@ void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
     if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, scratch);
     else integrate_shape_matching(model, obj, stiffness, state, scratch);
   };
-  if (scratch.pool) scratch.pool->parallel_for(tasks, integrate);
-  else
-    for (Index t = 0; t < tasks; ++t) integrate(t, 0);
+  parallel_for(scratch.pool, tasks, integrate);
 }
 
 // The "solver" response's share of the dynamics (contact_solver.cpp runs the step around it).
@@ -203,9 +201,7 @@ void predict_dynamics(const Model& model, State& state, Scratch& scratch) {
     for (Index n = obj.node_begin; n < obj.node_end; ++n) scratch.x_prev[n] = state.x[n];
     integrate_shape_matching(model, obj, state.params.stiffness[i], state, scratch);
   };
-  if (scratch.pool) scratch.pool->parallel_for(tasks, predict);
-  else
-    for (Index t = 0; t < tasks; ++t) predict(t, 0);
+  parallel_for(scratch.pool, tasks, predict);
 }
 
 int dynamics_iterations(const Model& model) {
@@ -222,9 +218,7 @@ void sweep_dynamics(const Model& model, int iteration, State& state, Scratch& sc
     if (obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations)
       sweep_mass_spring(model, obj, spring_solve(model, obj, state.params.stiffness[i], state, scratch), state, scratch);
   };
-  if (scratch.pool) scratch.pool->parallel_for(scratch.object_task_count, sweep);
-  else
-    for (Index t = 0; t < scratch.object_task_count; ++t) sweep(t, 0);
+  parallel_for(scratch.pool, scratch.object_task_count, sweep);
 }
 
 void finish_dynamics(const Model& model, State& state, Scratch& scratch) {
@@ -238,9 +232,7 @@ void finish_dynamics(const Model& model, State& state, Scratch& scratch) {
     const double inv_dt = 1.0 / model.settings.dt;
     for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
   };
-  if (scratch.pool) scratch.pool->parallel_for(scratch.object_task_count, finish);
-  else
-    for (Index t = 0; t < scratch.object_task_count; ++t) finish(t, 0);
+  parallel_for(scratch.pool, scratch.object_task_count, finish);
 }
 
 }  // namespace ffd

@@ -89,6 +89,31 @@ inline NodeInBox node_in_box(const BoxPlanes& planes, const Vec3& p) {
   return result;
 }
 
+// The face of the box a node at p is nearest to leaving through, and how far out of its plane
+// the node lies (< 0: inside, by eq. 7's least depth), when the node lies within `margin` of
+// every plane: inside the box grown by margin. With margin 0 that is node_in_box's inside
+// (height = -depth, exactly). Otherwise face -1.
+struct NearFace {
+  int face = -1;
+  double height = INFINITY;  // signed distance out of the face's plane, m
+};
+
+inline NearFace near_face(const BoxPlanes& planes, const Vec3& p, double margin) {
+  NearFace near;
+  if (planes.degenerate) return near;
+  double outmost = -INFINITY;
+  for (int f = 0; f < 6; ++f) {
+    const double height = planes.normal[f].dot(p) - planes.offset[f];
+    if (!(height < margin)) return NearFace{};  // beyond the margin (also rejects NaN)
+    if (height > outmost) {
+      outmost = height;
+      near.face = f;
+    }
+  }
+  near.height = outmost;
+  return near;
+}
+
 // Relative speeds below this (m/s) do not tell which face a node came through.
 inline constexpr double kMinApproachSpeed = 1e-4;
 

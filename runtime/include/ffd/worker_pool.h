@@ -84,6 +84,17 @@ class WorkerPool {
   std::vector<std::thread> workers_;
 };
 
+// pool->parallel_for(chunks, fn), or every chunk on this thread where there is no pool (a
+// Scratch without attach_pool()).
+template <class Fn>
+void parallel_for(WorkerPool* pool, std::uint32_t chunks, Fn&& fn) {
+  if (pool) {
+    pool->parallel_for(chunks, fn);
+    return;
+  }
+  for (std::uint32_t c = 0; c < chunks; ++c) fn(c, 0u);
+}
+
 // One step of a spin-wait inside a step: a PAUSE, and after every few thousand a yield of
 // the core, so that more threads than cores (8 threads on 2 cores, the tests) still progress.
 void spin_wait(int& spins);
