@@ -546,10 +546,7 @@ class ScriptReader {
       const TableReader p(origin_, *positions[i], path, kPositionKeys);
       PositionLimit limit;
       limit.where = location(origin_, positions[i]->source());
-      const auto pattern = p.string("object");
-      if (!pattern) p.fail_missing("object", " (an object name, or a name prefix ending in '*')");
-      limit.pattern = *pattern;
-      limit.objects = objects_matching(p, "object", *pattern);
+      limit.pattern = object_pattern(p, limit.objects);
       if (const auto relative = p.string("relative_to")) {
         limit.relative_to_name = *relative;
         limit.relative_to = find_object(p, "relative_to", *relative);
@@ -589,10 +586,7 @@ class ScriptReader {
       const TableReader c(origin_, *creeps[i], path, kCreepKeys);
       CreepLimit creep;
       creep.where = location(origin_, creeps[i]->source());
-      const auto pattern = c.string("object");
-      if (!pattern) c.fail_missing("object", " (an object name, or a name prefix ending in '*')");
-      creep.pattern = *pattern;
-      creep.objects = objects_matching(c, "object", *pattern);
+      creep.pattern = object_pattern(c, creep.objects);
       creep.max_m = c.required_number("max_m", kNonNegative, " (m: how far a centre of mass may move)");
       read_window(c, path, script.steps, creep.from_step, creep.to_step, creep.every_steps);
       if (creep.from_step % creep.every_steps != 0)
@@ -635,6 +629,14 @@ class ScriptReader {
     }
     std::stable_sort(script.hashes.begin(), script.hashes.end(),
                      [](const HashCheck& x, const HashCheck& y) { return x.step < y.step; });
+  }
+
+  // The required key `object` of an assertion: its text, and the objects it names.
+  std::string object_pattern(const TableReader& t, std::vector<Index>& objects) const {
+    const auto pattern = t.string("object");
+    if (!pattern) t.fail_missing("object", " (an object name, or a name prefix ending in '*')");
+    objects = objects_matching(t, "object", *pattern);
+    return *pattern;
   }
 
   // An exact name, or every object whose name starts with the text before a final '*'.
