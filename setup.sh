@@ -19,7 +19,9 @@ packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplus
           libimgui-dev libepoxy-dev libglfw3-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
           libfreetype-dev fonts-dejavu-core libstb-dev xvfb xauth
           # FCL: the broad-phase race in ffdsim bench; gnuplot: the plot of ffdsim accuracy
-          libfcl-dev gnuplot-nox)
+          libfcl-dev gnuplot-nox
+          # the Python reference bridge of the device link (ui/device/bridges), run by the tests
+          python3)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

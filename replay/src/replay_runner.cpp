@@ -500,6 +500,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
     std::string limit;
     if (w.relative_std_max) limit += "deviation <= " + number(100.0 * *w.relative_std_max, "%") + " of the mean";
     if (w.mean_min_n) limit += std::string(limit.empty() ? "" : ", ") + "mean >= " + number(*w.mean_min_n, "N");
+    if (w.mean_max_n) limit += std::string(limit.empty() ? "" : ", ") + "mean <= " + number(*w.mean_max_n, "N");
     if (w.above_previous) limit += std::string(limit.empty() ? "" : ", ") + "mean above the window before";
     a.limit = limit;
     if (m.steps == 0) {
@@ -513,6 +514,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       a.passed = true;
       if (w.relative_std_max) a.passed = a.passed && mean > 0.0 && deviation <= *w.relative_std_max * mean;
       if (w.mean_min_n) a.passed = a.passed && mean >= *w.mean_min_n;
+      if (w.mean_max_n) a.passed = a.passed && mean <= *w.mean_max_n;
       if (w.above_previous) a.passed = a.passed && mean > force_windows[i - 1].mean();
     }
     out.push_back(a);

@@ -32,7 +32,7 @@ const std::vector<std::string_view> kMotionKeys = {"rms_speed_max_m_s", "kinetic
 const std::vector<std::string_view> kCreepKeys = {"object", "max_m", "from_step", "from_ms", "to_step", "to_ms",
                                                   "every_steps", "every_ms"};
 const std::vector<std::string_view> kForceWindowKeys = {"from_step", "from_ms", "to_step", "to_ms",
-                                                        "relative_std_max", "mean_min_n", "above_previous"};
+                                                        "relative_std_max", "mean_min_n", "mean_max_n", "above_previous"};
 const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p99_us", "compute_max_us",
                                                     "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
                                                     "deadline_misses"};
@@ -606,10 +606,11 @@ class ScriptReader {
       if (window.from_step >= window.to_step) w.fail_here(path, "the window holds no step ('from' must be before 'to')");
       window.relative_std_max = optional_number(w, "relative_std_max", kPositive);
       window.mean_min_n = optional_number(w, "mean_min_n", kNonNegative);
+      window.mean_max_n = optional_number(w, "mean_max_n", kNonNegative);
       window.above_previous = w.boolean("above_previous", false);
       if (window.above_previous && i == 0) w.fail_at("above_previous", "the first force window has none before it");
-      if (!window.relative_std_max && !window.mean_min_n && !window.above_previous)
-        w.fail_here(path, "give 'relative_std_max', 'mean_min_n' and/or 'above_previous'");
+      if (!window.relative_std_max && !window.mean_min_n && !window.mean_max_n && !window.above_previous)
+        w.fail_here(path, "give 'relative_std_max', 'mean_min_n', 'mean_max_n' and/or 'above_previous'");
       script.force_windows.push_back(window);
     }
     const auto hashes = array_of_tables(a, "hash");

@@ -99,6 +99,7 @@ struct PhysicsLoop::Impl {
   void publish_frame();
   void publish_snapshot();
   void govern_accuracy(std::int64_t compute_ns);
+  void take_device_position(std::int64_t release_ns);
   template <class Queue, class T>
   bool push_lossless(Queue& queue, const T& item, std::atomic<std::uint64_t>& dropped);
 
@@ -258,11 +259,27 @@ void PhysicsLoop::Impl::govern_accuracy(std::int64_t compute_ns) {
   accuracy_switches.fetch_add(1, std::memory_order_relaxed);
 }
 
+// The device link's position for this step becomes a ProbePose command for this step, queued
+// behind whatever is pending: applied, counted and recorded like the UI's (a replay of the
+// recording needs no device).
+void PhysicsLoop::Impl::take_device_position(std::int64_t release_ns) {
+  Vec3 position;
+  if (!options.probe_source->device_position(state.step, release_ns, state.probe.device, position)) return;
+  if (pending_count == pending.size()) return;  // full: this step keeps the last position
+  Command& c = pending[pending_count++];
+  c = Command{};
+  c.step = state.step;
+  c.kind = CommandKind::ProbePose;
+  c.vector = position;
+}
+
 void PhysicsLoop::Impl::take_step(std::int64_t release_ns, std::int64_t wake_ns) {
   std::uint32_t applied_count = 0;
   bool single = false;
+  if (options.probe_source) take_device_position(release_ns);
   if (!apply_due_commands(single, applied_count)) return;  // paused
   step(model, state, scratch, report);
+  if (options.probe_source) options.probe_source->rendered_force(state.step, release_ns, state.probe.force);
   Telemetry t;
   t.step = state.step;
   t.finite = report.finite;

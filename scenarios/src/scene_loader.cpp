@@ -30,8 +30,9 @@ namespace ffd {
 namespace {
 
 const std::vector<std::string_view> kRootKeys = {"simulation", "plane", "object", "group", "probe", "grab"};
-const std::vector<std::string_view> kProbeKeys = {"radius", "mass", "coupling_stiffness", "coupling_damping",
-                                                  "start"};
+const std::vector<std::string_view> kProbeKeys = {"radius",      "mass",        "coupling_stiffness",
+                                                  "coupling_damping", "start", "force_limit",
+                                                  "force_rate_limit", "watchdog_ms"};
 const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
@@ -149,6 +150,9 @@ class SceneReader {
       p.coupling_stiffness = probe.number("coupling_stiffness", p.coupling_stiffness, kNonNegative);
       p.coupling_damping = probe.number("coupling_damping", p.coupling_damping, kNonNegative);
       p.start = probe.vec3("start", p.start);
+      p.force_limit = probe.number("force_limit", p.force_limit, kPositive);
+      p.force_rate_limit = probe.number("force_rate_limit", p.force_rate_limit, kPositive);
+      p.watchdog_ms = probe.number("watchdog_ms", p.watchdog_ms, kPositive);
     }
     if (const toml::table* table = root.subtable("grab")) {
       if (!has(settings.effects, Effect::Grab))

@@ -494,5 +494,5 @@ TEST_CASE("Replay scripts: malformed motion, creep and force-window assertions n
   CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 20\nto_step = 20\nmean_min_n = 1.0\n")),
                     Contains("the window holds no step"));
   CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 10\nto_step = 20\n")),
-                    Contains("give 'relative_std_max', 'mean_min_n' and/or 'above_previous'"));
+                    Contains("give 'relative_std_max', 'mean_min_n', 'mean_max_n' and/or 'above_previous'"));
 }

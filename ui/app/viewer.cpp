@@ -581,7 +581,25 @@ void Viewer::latency_panel(int width) {
     const auto asleep = std::count(frame->asleep.begin(), frame->asleep.end(), std::uint8_t{1});
     ImGui::Text("asleep %lld of %zu objects (drawn grey)", static_cast<long long>(asleep), model.objects.size());
   }
+  if (options_.device) device_panel(*options_.device);
   ImGui::End();
+}
+
+// The haptic device link: its state, rate and every counter a device user checks first.
+void Viewer::device_panel(const device::DeviceLink& link) {
+  const device::LinkCounters c = link.counters();
+  ImGui::Separator();
+  ImGui::TextUnformatted("device link");
+  const ImVec4 colour = c.state == device::LinkState::Live ? ImVec4(0.4f, 0.9f, 0.4f, 1.0f) : ImVec4(1.0f, 0.5f, 0.3f, 1.0f);
+  ImGui::TextColored(colour, "udp :%u  %s  %.0f Hz", static_cast<unsigned>(link.port()), device::link_state_name(c.state),
+                     c.sample_rate_hz);
+  ImGui::Text("samples %llu  forces sent %llu  force %.2f N", static_cast<unsigned long long>(c.samples),
+              static_cast<unsigned long long>(c.forces_sent), c.force.norm());
+  ImGui::Text("dropped: malformed %llu  duplicate %llu  late %llu  missing %llu",
+              static_cast<unsigned long long>(c.malformed_total()), static_cast<unsigned long long>(c.duplicates),
+              static_cast<unsigned long long>(c.out_of_order), static_cast<unsigned long long>(c.sequence_gaps));
+  ImGui::Text("watchdog %llu  limited %llu  rate limited %llu", static_cast<unsigned long long>(c.watchdog_trips),
+              static_cast<unsigned long long>(c.force_limited), static_cast<unsigned long long>(c.rate_limited));
 }
 
 void Viewer::help_overlay(int height) {

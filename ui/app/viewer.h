@@ -9,6 +9,7 @@
 
 #include "app/input.h"
 #include "app/session.h"
+#include "device/device_link.h"
 #include "render/camera.h"
 #include "render/scene_renderer.h"
 
@@ -21,6 +22,7 @@ struct ViewerOptions {
   std::string scenes_folder;    // the scene picker lists the *.toml files here
   std::string recordings_folder = "out/recordings";
   SessionOptions session;
+  const device::DeviceLink* device = nullptr;  // a haptic device on the probe: its panel shows the link
 };
 
 struct PixelRect {
@@ -66,6 +68,7 @@ class Viewer {
   void view_panel();
   void record_panel();
   void latency_panel(int width);
+  void device_panel(const device::DeviceLink& link);
   void help_overlay(int height);
   void shortcuts(const InputState& input);
   void pointer(const InputState& input, int width, int height, float dt_s);

@@ -2,6 +2,7 @@
 // Subcommands of the ffdsim program. Each registers its options on the CLI11 app and runs
 // when chosen; run() returns the process exit code.
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,10 @@ struct RunOptions {
   bool auto_accuracy = false;  // budget-aware accuracy from the scene's level up
   int threads = 0;
   bool quiet = false;
+  // --device: a haptic device link (ui/device/device_link.h); empty: none.
+  std::string device_url;
+  bool device_allow_remote = false;
+  double force_limit_n = -1.0, force_rate_limit = -1.0, watchdog_ms = -1.0;  // < 0: the scene's
 };
 void register_run(CLI::App& app, RunOptions& options);
 int run_run(const RunOptions& options);
@@ -94,5 +99,19 @@ struct AccuracyOptions {
 };
 void register_accuracy(CLI::App& app, AccuracyOptions& options);
 int run_accuracy_command(const AccuracyOptions& options);
+
+struct DeviceSimOptions {
+  std::string script;          // a replay script: its [[probe_path]] is the device's motion
+  std::string url;             // udp://HOST:PORT of `ffdsim run --device`
+  std::string out_path, report_path;
+  double drop = 0.0, duplicate = 0.0, reorder = 0.0;  // shares of the samples
+  std::uint64_t seed = 1;
+  double silence_at_ms = 0.0, silence_ms = 0.0;
+  double linger_ms = 200.0;
+  double wait_ms = 10000.0;    // for ffdsim to answer before the path starts
+  bool quiet = false;
+};
+void register_device_sim(CLI::App& app, DeviceSimOptions& options);
+int run_device_sim(const DeviceSimOptions& options);
 
 }  // namespace ffdsim

@@ -44,6 +44,8 @@ int main(int argc, char** argv) {
   ffdsim::register_bench(app, bench);
   ffdsim::AccuracyOptions accuracy;
   ffdsim::register_accuracy(app, accuracy);
+  ffdsim::DeviceSimOptions device_sim;
+  ffdsim::register_device_sim(app, device_sim);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -53,6 +55,7 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("replay")) return ffdsim::run_replay_command(replay);
   if (app.got_subcommand("run")) return ffdsim::run_run(run);
   if (app.got_subcommand("bench")) return ffdsim::run_bench(bench);
+  if (app.got_subcommand("device-sim")) return ffdsim::run_device_sim(device_sim);
   if (app.got_subcommand("accuracy")) return ffdsim::run_accuracy_command(accuracy);
   return ffdsim::kExitUsage;
 }

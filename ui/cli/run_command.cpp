@@ -17,6 +17,7 @@
 #include "app/session.h"
 #include "app/ui_run.h"
 #include "commands.h"
+#include "device/device_link.h"
 #include "ffd/physics_loop.h"
 #include "ffd/recording.h"
 #include "ffd/replay_runner.h"
@@ -56,7 +57,36 @@ struct RunFigures {
   std::size_t recorded_commands = 0, recorded_hashes = 0;
   std::string recording_error;
   nlohmann::json ui;  // UI figures, when a viewer ran
+  const ffd::device::DeviceLink* device = nullptr;  // --device
 };
+
+nlohmann::json device_json(const ffd::device::DeviceLink& link) {
+  const ffd::device::LinkCounters c = link.counters();
+  nlohmann::json malformed = nlohmann::json::object();
+  for (std::size_t i = 1; i < c.malformed.size(); ++i)
+    malformed[ffd::device::decode_error_name(static_cast<ffd::device::DecodeError>(i))] = c.malformed[i];
+  const ffd::device::LinkSettings& s = link.settings();
+  return {{"url", "udp://" + s.address + ":" + std::to_string(link.port())},
+          {"state", ffd::device::link_state_name(c.state)},
+          {"datagrams", c.datagrams},
+          {"samples", c.samples},
+          {"malformed", malformed},
+          {"malformed_total", c.malformed_total()},
+          {"duplicates", c.duplicates},
+          {"out_of_order", c.out_of_order},
+          {"sequence_gaps", c.sequence_gaps},
+          {"queue_full", c.queue_full},
+          {"forces_sent", c.forces_sent},
+          {"forces_unsent", c.forces_unsent},
+          {"watchdog_trips", c.watchdog_trips},
+          {"reengagements", c.reengagements},
+          {"force_limited_steps", c.force_limited},
+          {"rate_limited_steps", c.rate_limited},
+          {"sample_rate_hz", c.sample_rate_hz},
+          {"force_limit_n", s.force_limit_n},
+          {"force_rate_limit_n_per_ms", s.force_rate_limit_n_per_ms},
+          {"watchdog_ms", s.watchdog_ms}};
+}
 
 // The run report (--report) as JSON.
 nlohmann::json report_json(const RunOptions& o, const RunFigures& f, bool interrupted, bool running) {
@@ -82,8 +112,9 @@ nlohmann::json report_json(const RunOptions& o, const RunFigures& f, bool interr
                       {"sched_fifo", f.counters.realtime_priority},
                       {"memory_locked", f.counters.memory_locked}};
   if (!f.ui.is_null()) j["ui"] = f.ui;
-j["running"] = running;  // true: written while the run went on (it was cut off if it stays so)
-return j;
+  if (f.device) j["device"] = device_json(*f.device);
+  j["running"] = running;  // true: written while the run went on (it was cut off if it stays so)
+  return j;
 }
 
 // Through a temporary file renamed over the report: a run killed at any moment leaves the
@@ -128,6 +159,16 @@ int report(const RunOptions& o, const RunFigures& f) {
       std::printf("ui: %s, %zu frames, %.1f ms per frame (max %.1f), %zu commands applied\n",
                   f.ui.value("renderer", "").c_str(), f.ui.value("frames", std::size_t{0}), f.ui.value("frame_mean_ms", 0.0),
                   f.ui.value("frame_max_ms", 0.0), f.log.commands.size());
+    if (f.device) {
+      const ffd::device::LinkCounters c = f.device->counters();
+      std::printf("device: %s, %llu samples (%.0f Hz), %llu malformed, %llu duplicates, %llu out of order, %llu "
+                  "missing; %llu forces sent; watchdog %llu, force limited %llu steps, rate limited %llu\n",
+                  ffd::device::link_state_name(c.state), static_cast<unsigned long long>(c.samples), c.sample_rate_hz,
+                  static_cast<unsigned long long>(c.malformed_total()), static_cast<unsigned long long>(c.duplicates),
+                  static_cast<unsigned long long>(c.out_of_order), static_cast<unsigned long long>(c.sequence_gaps),
+                  static_cast<unsigned long long>(c.forces_sent), static_cast<unsigned long long>(c.watchdog_trips),
+                  static_cast<unsigned long long>(c.force_limited), static_cast<unsigned long long>(c.rate_limited));
+    }
   }
   if (!o.report_path.empty() && !write_report_file(o.report_path, report_json(o, f, interrupted, false))) {
     std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
@@ -151,7 +192,7 @@ int report(const RunOptions& o, const RunFigures& f) {
   return status;
 }
 
-ffd::LoopOptions loop_options(const RunOptions& o) {
+ffd::LoopOptions loop_options(const RunOptions& o, ffd::device::DeviceLink* device) {
   ffd::LoopOptions options;
   options.pacing = ffd::Pacing::RealTime;
   options.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);
@@ -160,6 +201,7 @@ ffd::LoopOptions loop_options(const RunOptions& o) {
   options.hash_every = static_cast<std::uint32_t>(o.hash_every);
   options.auto_accuracy = o.auto_accuracy;
   options.threads = thread_count(o.threads);
+  options.probe_source = device;
   return options;
 }
 
@@ -177,9 +219,9 @@ RunFigures figures_of(const ffd::ui::Session& session, const std::string& mode) 
   return f;
 }
 
-RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
+RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path, ffd::device::DeviceLink* device) {
   ffd::ui::SessionOptions options;
-  options.loop = loop_options(o);
+  options.loop = loop_options(o, device);
   options.loop.frame_boxes = false;  // nobody draws them
   options.record_path = o.record_path;
   ffd::ui::Session session(scene_path, options);
@@ -190,7 +232,9 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   while (std::chrono::steady_clock::now() < end && !g_interrupted.load()) {
     session.poll();
     if (!o.report_path.empty() && std::chrono::steady_clock::now() >= next_report) {
-      write_report_file(o.report_path, report_json(o, figures_of(session, "headless loop"), false, true));
+      RunFigures now = figures_of(session, "headless loop");
+      now.device = device;
+      write_report_file(o.report_path, report_json(o, now, false, true));
       next_report += std::chrono::seconds(1);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(16));
@@ -198,6 +242,7 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path) {
   session.stop();
   RunFigures f = figures_of(session, "headless loop");
   f.scene_path = scene_path;
+  f.device = device;
   if (const ffd::RecordingStream* r = session.recording()) {
     f.recorded_commands = r->commands();
     f.recorded_hashes = r->hashes();
@@ -235,6 +280,20 @@ void register_run(CLI::App& app, RunOptions& o) {
                 "scene's level up); each switch is recorded");
   cmd->add_option("--spin-us", o.spin_us, "Busy-wait before each release, microseconds")->check(CLI::Range(0.0, 1e6));
   add_threads_option(*cmd, o.threads);
+  cmd->add_option("--device", o.device_url,
+                  "A haptic device bridge drives the probe over UDP at this address, udp://127.0.0.1:PORT (README, "
+                  "\"Haptic devices\")");
+  cmd->add_flag("--device-allow-remote", o.device_allow_remote,
+                "Let --device bind an address other than loopback (the probe is then reachable from the network)");
+  cmd->add_option("--force-limit", o.force_limit_n, "Device: largest force sent, N (default: the scene's [probe] force_limit)")
+      ->check(CLI::Range(1e-6, 1e6));
+  cmd->add_option("--force-rate-limit", o.force_rate_limit,
+                  "Device: largest change of the force sent, N/ms (default: the scene's [probe] force_rate_limit)")
+      ->check(CLI::Range(1e-6, 1e6));
+  cmd->add_option("--watchdog-ms", o.watchdog_ms,
+                  "Device: no sample for this long sets the force to zero and holds the probe (default: the scene's "
+                  "[probe] watchdog_ms)")
+      ->check(CLI::Range(0.1, 1e6));
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
 
@@ -252,6 +311,7 @@ int run_run(const RunOptions& given) {
   ffd::Model model;
   std::string scene_path;
   std::optional<ffd::UiScript> script;
+  std::unique_ptr<ffd::device::DeviceLink> device;
   try {
     if (!o.input_script.empty()) {
       script = ffd::load_ui_script_file(o.input_script);
@@ -267,6 +327,21 @@ int run_run(const RunOptions& given) {
     if (!o.frames_dir.empty()) ensure_folder(o.frames_dir);
     if (!o.frames_dir.empty() && !o.headless && !demo)
       throw ffd::InputError("--frames writes the headless viewer's frames: add --headless");
+    if (!o.device_url.empty()) {
+      if (!ffd::has(model.settings.effects, ffd::Effect::Probe))
+        throw ffd::InputError(scene_path + ": --device drives the probe, and the scene has no \"probe\" effect");
+      ffd::device::LinkSettings link;
+      ffd::device::parse_device_url(o.device_url, link);
+      link.allow_remote = o.device_allow_remote;
+      const ffd::ProbeSettings& probe = model.settings.probe;
+      link.force_limit_n = o.force_limit_n > 0.0 ? o.force_limit_n : probe.force_limit;
+      link.force_rate_limit_n_per_ms = o.force_rate_limit > 0.0 ? o.force_rate_limit : probe.force_rate_limit;
+      link.watchdog_ms = o.watchdog_ms > 0.0 ? o.watchdog_ms : probe.watchdog_ms;
+      link.step_ms = model.settings.dt * 1000.0;
+      device = std::make_unique<ffd::device::DeviceLink>(link);
+      if (!o.quiet)
+        std::printf("device link: listening on udp://%s:%u\n", link.address.c_str(), static_cast<unsigned>(device->port()));
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
@@ -279,7 +354,7 @@ int run_run(const RunOptions& given) {
   int status = kExitOk;
   if (!viewer) {
     try {
-      figures = run_loop_only(o, scene_path);
+      figures = run_loop_only(o, scene_path, device.get());
     } catch (const std::exception& e) {  // the recording cannot be created
       std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
       return kExitBadInput;
@@ -287,7 +362,8 @@ int run_run(const RunOptions& given) {
   } else {
     ffd::ui::UiRunOptions u;
     u.viewer.scene_path = scene_path;
-    u.viewer.session.loop = loop_options(o);
+    u.viewer.session.loop = loop_options(o, device.get());
+    u.viewer.device = device.get();
     u.viewer.session.record_path = o.record_path;
     u.script = script;
     const bool window = !o.headless && !demo;
@@ -298,10 +374,11 @@ int run_run(const RunOptions& given) {
     u.height = o.height;
     u.interrupted = &g_interrupted;
     // The report at the first frame and every second (the fallback below may set its path).
-    u.every_second = [&o, window](const ffd::ui::Session& session) {
-      if (!o.report_path.empty())
-        write_report_file(o.report_path,
-                          report_json(o, figures_of(session, window ? "window" : "headless viewer"), false, true));
+    u.every_second = [&o, &device, window](const ffd::ui::Session& session) {
+      if (o.report_path.empty()) return;
+      RunFigures now = figures_of(session, window ? "window" : "headless viewer");
+      now.device = device.get();
+      write_report_file(o.report_path, report_json(o, now, false, true));
     };
     ffd::ui::UiRunResult r;
     try {
@@ -333,6 +410,7 @@ int run_run(const RunOptions& given) {
       return kExitBadInput;
     }
     figures.scene_path = r.scene_path;
+    figures.device = device.get();
     figures.compute_ns = std::move(r.compute_ns);
     figures.lateness_ns = std::move(r.lateness_ns);
     figures.counters = r.counters;

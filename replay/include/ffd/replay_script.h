@@ -106,13 +106,15 @@ struct CreepLimit {
 };
 
 // The probe's force output |F| over the steps (from_step, to_step]: steady (standard deviation
-// at most `relative_std_max` of the mean), at least `mean_min_n` on average, and, with
+// at most `relative_std_max` of the mean), at least `mean_min_n` and at most `mean_max_n` on
+// average, and, with
 // `above_previous`, a larger mean than the force window before it in the script.
 struct ForceWindow {
   std::string where;
   std::uint64_t from_step = 0, to_step = 0;
   std::optional<double> relative_std_max;
   std::optional<double> mean_min_n;
+  std::optional<double> mean_max_n;
   bool above_previous = false;
 };
 

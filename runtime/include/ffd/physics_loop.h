@@ -33,6 +33,22 @@ enum class Pacing : std::uint8_t {
   Fast,      // steps back to back; waits for the lossless consumers instead of dropping
 };
 
+// A live source of the probe's device position polled by the physics thread every step (a
+// haptic device link, README "Haptic devices"). Both calls run on the physics thread and must
+// neither allocate, lock, block nor do I/O: they exchange data with their own threads through
+// lock-free queues. What sample() returns becomes a ProbePose command stamped with the step,
+// applied and recorded like any other, so a recording replays the session without the source.
+class ProbeSource {
+ public:
+  virtual ~ProbeSource() = default;
+  // Before step `step` (released at `release_ns`, CLOCK_MONOTONIC): true and the device
+  // position to apply (m), or false to leave the probe's device target where it is.
+  // `current` is the probe's device target now (where a link that starts or resumes eases from).
+  virtual bool device_position(std::uint64_t step, std::int64_t release_ns, const Vec3& current, Vec3& position) = 0;
+  // After the step: the probe's coupling force (N) the step rendered, to send to the device.
+  virtual void rendered_force(std::uint64_t step, std::int64_t release_ns, const Vec3& force) = 0;
+};
+
 struct LoopOptions {
   Pacing pacing = Pacing::RealTime;
   std::int64_t period_ns = 1'000'000;  // 1 kHz
@@ -62,6 +78,8 @@ struct LoopOptions {
   // each worker thread as it starts and ends (for naming or pinning the threads, and for
   // tests that count what the loop does).
   std::function<void()> on_thread_start, on_thread_stop;
+  // A device link driving the probe (nullptr: none). Not owned; it must outlive the loop.
+  ProbeSource* probe_source = nullptr;
 };
 
 // One record per step, lossless: what the recorder and the replay assertions read.

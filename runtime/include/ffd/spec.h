@@ -92,6 +92,11 @@ struct ProbeSettings {
   double coupling_stiffness = 300.0;  // N/m
   double coupling_damping = 6.0;      // N*s/m, on the proxy's velocity relative to the device
   Vec3 start = Vec3(0.0, 0.5, 0.0);   // m, device and proxy position at time zero
+  // A haptic device on the probe (ffdsim run --device): what the link lets out. Not physics:
+  // the step never reads them.
+  double force_limit = 8.0;           // N, |F| sent to the device at most
+  double force_rate_limit = 1.0;      // N/ms, change of the force sent per millisecond at most
+  double watchdog_ms = 20.0;          // ms without a device sample: force zero, probe held
 };
 
 // Grab: a point of an object (a lattice cell and local coordinates in it) pulled towards a
