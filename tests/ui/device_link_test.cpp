@@ -18,7 +18,11 @@
 
 #include "device/device_link.h"
 #include "device/device_protocol.h"
+#include "app/pointer_probe.h"
+#include "ffd/scene_loader.h"
+#include "support/allocation_counter.h"
 #include "support/run_ffdsim.h"
+#include "support/test_scenes.h"
 
 // The C reference bridge (ui/device/bridges), compiled here as C++ too.
 #include "ffdsim_device.h"
@@ -94,8 +98,8 @@ std::uint16_t test_port(int offset) { return static_cast<std::uint16_t>(20000 + 
 
 // The ffdsim program with the device simulator beside it: `ffdsim run --device` in the
 // background, the simulator in the foreground, then both ended.
-test::ProgramResult run_with_device(const std::string& run_arguments, const std::string& sim_arguments) {
-  test::ProgramResult r;
+::test::ProgramResult run_with_device(const std::string& run_arguments, const std::string& sim_arguments) {
+  ::test::ProgramResult r;
   const std::string binary = FFDSIM_BINARY;
   const std::string command = binary + " run --headless " + run_arguments + " & " + binary + " device-sim " +
                               sim_arguments + "; status=$?; wait; exit $status";
@@ -117,7 +121,7 @@ TEST_CASE("Device protocol: samples and forces round-trip, little-endian at the 
   Sample s;
   s.sequence = 0x01020304u;
   s.buttons = 5;
-  s.device_time_us = 0x1122334455667788ull;
+  s.device_time_us = 0x0000112233445566ull;
   s.position = Vec3(0.1, -0.25, 3.0);
   s.orientation = {0.0, 0.0, 1.0, 0.0};
   const Message m = encode_sample(s);
@@ -125,7 +129,7 @@ TEST_CASE("Device protocol: samples and forces round-trip, little-endian at the 
   CHECK(std::memcmp(m.data(), "FFDS", 4) == 0);
   CHECK((m[4] == 1 && m[5] == 0 && m[6] == 1 && m[7] == 0));  // version 1, kind 1
   CHECK((m[8] == 0x04 && m[9] == 0x03 && m[10] == 0x02 && m[11] == 0x01));
-  CHECK((m[16] == 0x88 && m[23] == 0x11));
+  CHECK((m[16] == 0x66 && m[21] == 0x11 && m[23] == 0x00));
   double y;
   std::memcpy(&y, m.data() + 32, 8);  // this test runs on a little-endian machine
   CHECK(y == -0.25);
@@ -189,7 +193,52 @@ TEST_CASE("Device protocol: each kind of malformed sample is refused with its re
   m = good;
   std::memcpy(m.data() + 56, &nan, 8);
   CHECK(decode(m) == DecodeError::NotFinite);
+  m = good;
+  m[23] = 0x80;  // device time 2^63 us
+  CHECK(decode(m) == DecodeError::OutOfRange);
   CHECK(out.sequence == 42);  // never written by a refused sample
+}
+
+TEST_CASE("Position history: linear between the samples around a time, the nearest end outside them", "[device]") {
+  PositionHistory h;
+  h.add({1'000'000, 5'000'000, Vec3(0.0, 0.0, 0.0)});
+  h.add({3'000'000, 6'000'000, Vec3(2.0, 0.0, 0.0)});
+  h.add({4'000'000, 9'000'000, Vec3(2.0, 1.0, 0.0)});
+  CHECK(h.at(0.0) == Vec3(0.0, 0.0, 0.0));
+  CHECK(h.at(2'000'000.0) == Vec3(1.0, 0.0, 0.0));
+  CHECK(h.at(3'500'000.0) == Vec3(2.0, 0.5, 0.0));
+  CHECK(h.at(9e9) == Vec3(2.0, 1.0, 0.0));
+  CHECK(h.clock_offset_ns() == 3'000'000);  // the quickest delivery
+  CHECK(h.mean_interval_ns() == 1'500'000.0);
+  for (int i = 0; i < 40; ++i) h.add({10'000'000 + i * 1'000'000, 0, Vec3(i, 0.0, 0.0)});  // the oldest leave
+  CHECK(h.at(0.0) == Vec3(24.0, 0.0, 0.0));
+}
+
+TEST_CASE("Pointer probe: mouse moves 20 ms apart reach the physics thread as a smooth path, none when still",
+          "[device]") {
+  ffd::ui::PointerProbe pointer;
+  Vec3 position;
+  CHECK_FALSE(pointer.device_position(0, 0, Vec3::Zero(), position));
+  // Three moves of 1 cm, 20 ms apart (stamped as they are made).
+  for (int i = 0; i < 3; ++i) {
+    REQUIRE(pointer.move(Vec3(0.01 * i, 0.0, 0.0)));
+    if (i < 2) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  // Steps every millisecond from the last move on: the target never jumps by more than a
+  // 1 cm / 20 ms path allows (with the sleep's slack), and ends at the last move.
+  const std::int64_t start = now_ns();
+  Vec3 previous = Vec3::Constant(NAN);
+  int commands = 0;
+  for (int step = 0; step < 60; ++step) {
+    if (pointer.device_position(static_cast<std::uint64_t>(step), start + step * 1'000'000, Vec3::Zero(), position)) {
+      ++commands;
+      if (previous.allFinite()) CHECK((position - previous).norm() < 0.0012);
+      previous = position;
+    }
+  }
+  CHECK(commands > 10);
+  CHECK(previous == Vec3(0.02, 0.0, 0.0));
+  CHECK_FALSE(pointer.device_position(61, start + 61'000'000, Vec3::Zero(), position));  // still
 }
 
 TEST_CASE("Device URLs: udp://HOST:PORT, loopback unless allowed", "[device]") {
@@ -308,14 +357,66 @@ TEST_CASE("Device link: the force sent is limited in size and rate; the watchdog
   CHECK(link.counters().reengagements == 2);
 }
 
+TEST_CASE("Device link: a loop driven by a device allocates nothing on the physics thread and records every position",
+          "[device]") {
+  const Model model = ffd::test::compile_quietly(load_scene_file(kScene));
+  LinkSettings settings;
+  settings.step_ms = model.settings.dt * 1000.0;
+  DeviceLink link(settings);
+  Bridge bridge(link.port());
+  LoopOptions options;
+  options.pacing = Pacing::RealTime;
+  options.stop_at_step = 400;
+  options.lock_memory = false;
+  options.threads = 2;
+  options.probe_source = &link;
+  options.on_thread_start = [] { ffd::test::count_allocations_on_this_thread(true); };
+  options.on_thread_stop = [] { ffd::test::count_allocations_on_this_thread(false); };
+  ffd::test::reset_allocations();
+  PhysicsLoop loop(model, initial_state(model), std::move(options));
+  loop.start();
+  // The bridge at 1 kHz for 300 samples, moving down 0.2 mm a sample from the probe's start.
+  const std::int64_t start = now_ns();
+  std::uint32_t sent = 0;
+  std::vector<Command> applied;
+  Telemetry t;
+  while (!loop.finished()) {
+    const std::int64_t now = now_ns();
+    if (sent < 300 && now - start >= static_cast<std::int64_t>(sent) * 1'000'000) {
+      bridge.send(sent, Vec3(0.0, 0.3 - 0.0002 * sent, 0.0), static_cast<std::uint64_t>((now - start) / 1000));
+      ++sent;
+    }
+    Command c;
+    while (loop.pop_applied_command(c)) applied.push_back(c);
+    while (loop.pop_telemetry(t)) {
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  loop.join();
+  Command c;
+  while (loop.pop_applied_command(c)) applied.push_back(c);
+  CHECK(ffd::test::allocations() == 0);
+  // Each position the link gave became a ProbePose command for its step, in step order.
+  REQUIRE(applied.size() > 100);
+  std::uint64_t previous_step = 0;
+  for (const Command& a : applied) {
+    CHECK(a.kind == CommandKind::ProbePose);
+    CHECK(a.step >= previous_step);
+    CHECK((a.vector.y() <= 0.3 && a.vector.y() >= 0.3 - 0.0002 * 300));
+    previous_step = a.step;
+  }
+  CHECK(loop.state().probe.device == applied.back().vector);
+  CHECK(link.counters().forces_sent > 100);
+}
+
 TEST_CASE("ffdsim run --device with the device simulator: the force rises and falls, faults are counted, the recording "
           "replays",
           "[cli][device]") {
-  const fs::path dir = test::fresh_temp_dir("device_faults");
+  const fs::path dir = ::test::fresh_temp_dir("device_faults");
   fs::create_directories(dir);
   const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(1));
   // The path is 2.5 s long; the run outlasts it with the simulator's wait for the link.
-  const test::ProgramResult r = run_with_device(
+  const ::test::ProgramResult r = run_with_device(
       kScene + " --seconds 4.5 --device " + url + " --report " + (dir / "run.json").string() + " --record " +
           (dir / "session.toml").string() + " -q",
       kPath + " --to " + url + " --out " + (dir / "forces.csv").string() + " --report " + (dir / "sim.json").string() +
@@ -351,7 +452,7 @@ TEST_CASE("ffdsim run --device with the device simulator: the force rises and fa
   CHECK(sim.at("round_trip_us").at("samples").get<std::uint64_t>() > 1000);
   CHECK(sim.at("round_trip_us").at("p99").get<double>() < 50'000.0);
   // The session replays bit for bit without the device.
-  const test::ProgramResult replay = test::run_ffdsim("replay --fast " + (dir / "session.toml").string());
+  const ::test::ProgramResult replay = ::test::run_ffdsim("replay --fast " + (dir / "session.toml").string());
   INFO(replay.output);
   CHECK(replay.exit_code == 0);
   CHECK_THAT(replay.output, Catch::Contains("determinism.state_hash"));
@@ -359,10 +460,10 @@ TEST_CASE("ffdsim run --device with the device simulator: the force rises and fa
 
 TEST_CASE("ffdsim run --device: a device silent for 100 ms mid-press gets zero force at once, and no jump on return",
           "[cli][device]") {
-  const fs::path dir = test::fresh_temp_dir("device_watchdog");
+  const fs::path dir = ::test::fresh_temp_dir("device_watchdog");
   fs::create_directories(dir);
   const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(2));
-  const test::ProgramResult r = run_with_device(
+  const ::test::ProgramResult r = run_with_device(
       kScene + " --seconds 4.5 --watchdog-ms 20 --force-rate-limit 0.2 --device " + url + " --report " +
           (dir / "run.json").string() + " -q",
       kPath + " --to " + url + " --out " + (dir / "forces.csv").string() + " --report " + (dir / "sim.json").string() +

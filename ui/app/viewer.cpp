@@ -134,8 +134,12 @@ void Viewer::open_scene(const std::string& path, const std::string& record_path)
   // Load first: a bad scene leaves the running one alone.
   SessionOptions options = options_.session;
   options.record_path = record_path;
+  // Without a device, the mouse drives the probe through the physics thread's interpolation.
+  auto pointer = options_.device ? nullptr : std::make_unique<PointerProbe>();
+  if (pointer) options.loop.probe_source = pointer.get();
   auto session = std::make_unique<Session>(path, options);
   session_.reset();  // stops the old physics thread before its model goes away
+  pointer_probe_ = std::move(pointer);
   renderer_.reset();
   session_ = std::move(session);
   renderer_ = std::make_unique<SceneRenderer>(session_->model());
@@ -321,7 +325,8 @@ void Viewer::pointer(const InputState& input, int width, int height, float dt_s)
         Command c;
         c.kind = grabbing_ ? CommandKind::Drag : CommandKind::ProbePose;
         c.vector = target;
-        send(c);
+        if (grabbing_) send(c);
+        else if (pointer_probe_) pointer_probe_->move(target);  // interpolated at each step's time
         last_target_ = target;
       }
     }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "app/input.h"
+#include "app/pointer_probe.h"
 #include "app/session.h"
 #include "device/device_link.h"
 #include "render/camera.h"
@@ -84,6 +85,7 @@ class Viewer {
 
   ViewerOptions options_;
   std::unique_ptr<Session> session_;
+  std::unique_ptr<PointerProbe> pointer_probe_;  // the mouse on the probe (none with a device)
   std::unique_ptr<SceneRenderer> renderer_;
   OrbitCamera camera_;
   RenderOptions render_options_;

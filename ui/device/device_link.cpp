@@ -212,15 +212,11 @@ void DeviceLink::send_forces() {
 bool DeviceLink::device_position(std::uint64_t step, std::int64_t release_ns, const Vec3& current, Vec3& position) {
   Arrival a;
   while (arrivals_.try_dequeue(a)) {
-    if (history_count_ == kHistory) {
-      std::move(history_.begin() + 1, history_.end(), history_.begin());
-      --history_count_;
-    }
-    history_[static_cast<std::size_t>(history_count_++)] = a;
+    history_.add({static_cast<std::int64_t>(a.sample.device_time_us * 1000), a.arrival_ns, a.sample.position});
+    newest_ = a.sample;
   }
-  if (history_count_ == 0) return false;  // waiting for the first sample
-  const Arrival& newest = history_[static_cast<std::size_t>(history_count_ - 1)];
-  if (static_cast<double>(release_ns - newest.arrival_ns) > settings_.watchdog_ms * 1e6) {
+  if (history_.empty()) return false;  // waiting for the first sample
+  if (static_cast<double>(release_ns - history_.newest().received_ns) > settings_.watchdog_ms * 1e6) {
     if (state_ == LinkState::Live) {
       state_ = LinkState::Silent;
       shared_state_.store(state_, std::memory_order_relaxed);
@@ -228,33 +224,10 @@ bool DeviceLink::device_position(std::uint64_t step, std::int64_t release_ns, co
     }
     return false;  // the probe's target stays where it is
   }
-  // The device's clock onto this one: the sample that travelled fastest gives the offset
-  // (arrival minus device time is the offset plus that sample's delay, never less).
-  std::int64_t offset = INT64_MAX;
-  for (int i = 0; i < history_count_; ++i) {
-    const Arrival& h = history_[static_cast<std::size_t>(i)];
-    offset = std::min(offset, h.arrival_ns - static_cast<std::int64_t>(h.sample.device_time_us * 1000));
-  }
-  auto local_time = [&](int i) {
-    return static_cast<double>(static_cast<std::int64_t>(history_[static_cast<std::size_t>(i)].sample.device_time_us * 1000) + offset);
-  };
-  // The position at the release time less the delay: between the two samples around it,
-  // or the nearest end (never extrapolated).
-  const double t = static_cast<double>(release_ns) - settings_.delay_ms * 1e6;
-  Vec3 device = history_[0].sample.position;
-  if (t >= local_time(history_count_ - 1)) {
-    device = newest.sample.position;
-  } else {
-    for (int i = history_count_ - 1; i > 0; --i) {
-      const double t0 = local_time(i - 1), t1 = local_time(i);
-      if (t >= t0 && t1 > t0) {
-        const double u = (t - t0) / (t1 - t0);
-        device = (1.0 - u) * history_[static_cast<std::size_t>(i - 1)].sample.position +
-                 u * history_[static_cast<std::size_t>(i)].sample.position;
-        break;
-      }
-    }
-  }
+  // The position at the release time less the delay, on the device's clock: between the two
+  // samples around it.
+  const double t = static_cast<double>(release_ns - history_.clock_offset_ns()) - settings_.delay_ms * 1e6;
+  const Vec3 device = history_.at(t);
   if (state_ != LinkState::Live) {
     // The first sample, or the first after a silence: ease from where the probe's target is.
     state_ = LinkState::Live;
@@ -280,10 +253,9 @@ bool DeviceLink::device_position(std::uint64_t step, std::int64_t release_ns, co
 void DeviceLink::rendered_force(std::uint64_t step, std::int64_t, const Vec3& force) {
   Force out;
   out.step = step;
-  if (history_count_ > 0) {
-    const Sample& newest = history_[static_cast<std::size_t>(history_count_ - 1)].sample;
-    out.sample_sequence = newest.sequence;
-    out.sample_device_time_us = newest.device_time_us;
+  if (!history_.empty()) {
+    out.sample_sequence = newest_.sequence;
+    out.sample_device_time_us = newest_.device_time_us;
   }
   Vec3 f = Vec3::Zero();
   if (state_ == LinkState::Live) {

@@ -24,6 +24,7 @@
 #include <readerwriterqueue/readerwriterqueue.h>
 
 #include "device/device_protocol.h"
+#include "device/position_history.h"
 #include "ffd/physics_loop.h"
 
 namespace ffd::device {
@@ -128,10 +129,9 @@ class DeviceLink final : public ProbeSource {
   std::uint8_t peer_[16]{};  // sockaddr_in
   double interval_average_ns_ = 0.0;
 
-  // Physics thread only: the newest samples, oldest first.
-  static constexpr int kHistory = 16;
-  std::array<Arrival, kHistory> history_{};
-  int history_count_ = 0;
+  // Physics thread only: the newest samples (device clock), and the newest one whole.
+  PositionHistory history_;
+  Sample newest_;
   LinkState state_ = LinkState::Waiting;
   Vec3 ease_offset_ = Vec3::Zero();  // target = device + offset * (1 - ease)
   std::uint64_t ease_start_step_ = 0;

@@ -113,6 +113,7 @@ DecodeError decode_sample(const std::uint8_t* data, std::size_t size, Sample& ou
     if (!std::isfinite(s.position[i])) return DecodeError::NotFinite;
     if (std::fabs(s.position[i]) > kMaxPositionM) return DecodeError::OutOfRange;
   }
+  if (s.device_time_us > kMaxDeviceTimeUs) return DecodeError::OutOfRange;
   // A unit quaternion, within what single-precision device SDKs round to.
   if (!(std::fabs(norm_sq - 1.0) < 1e-3)) return DecodeError::OutOfRange;
   out = s;

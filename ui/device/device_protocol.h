@@ -32,6 +32,9 @@ inline constexpr std::size_t kMessageSize = 80;
 // Positions beyond this (m) from the origin are refused: no scene is that large, and a value
 // this far is a unit mistake or a corrupted packet, never a hand's motion.
 inline constexpr double kMaxPositionM = 1000.0;
+// Device times beyond this (us, 31 years of uptime) are refused: the link does arithmetic in
+// signed nanoseconds on them.
+inline constexpr std::uint64_t kMaxDeviceTimeUs = 1'000'000'000'000'000ull;
 
 // Force status bits.
 inline constexpr std::uint32_t kForceLive = 1u << 0;        // samples arrive: the force is rendered
@@ -65,7 +68,8 @@ enum class DecodeError : std::uint8_t {
   WrongVersion,   // this protocol, another version
   WrongKind,      // a force message sent to ffdsim, or an unknown kind
   NotFinite,      // a NaN or an infinity in a position or orientation
-  OutOfRange,     // a position beyond kMaxPositionM, or an orientation far from unit length
+  OutOfRange,     // a position beyond kMaxPositionM, an orientation far from unit length, a
+                  // device time beyond kMaxDeviceTimeUs
   Count
 };
 const char* decode_error_name(DecodeError e);
