@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "dynamics.h"
 #include "ffd/box_test.h"
@@ -23,6 +24,15 @@ constexpr double kRestingApproach = 0.05;
 }  // namespace
 
 const double kSpeculativeDistance = 0.001;
+
+namespace {
+// A node found deeper inside than this (m) beyond what its approach made in the last
+// kRecentEntrySteps steps is lodged: it got there by an error (a large step, a thin box, a
+// lattice that folded), not by touching. It is pushed out without friction: friction on such
+// a contact grips what it should release (the lower teapot's knob, lodged laterally in the
+// upper teapot's bottom boxes, was lifted with it by the grab).
+constexpr double kLodgedDepth = 0.0002;
+}  // namespace
 
 namespace {
 
@@ -108,6 +118,7 @@ struct Bodies {
 // surface; it is `depth` inside now.
 void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
                  double depth) {
+  const double dt = bodies.model.settings.dt;
   if (scratch.constraint_count >= scratch.constraints.size()) {
     scratch.constraints_dropped = true;
     return;
@@ -121,6 +132,8 @@ void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, c
   c.inv_mass = 0.0;
   c.lambda = 0.0;
   c.friction = Vec3::Zero();
+  static const double lodge = std::getenv("EXP_LODGE") ? std::atof(std::getenv("EXP_LODGE")) : kLodgedDepth;
+  c.lodged = depth > lodge + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
 }
 
 }  // namespace
@@ -296,7 +309,7 @@ void project_contacts(const Bodies& bodies, Scratch& scratch, double mu) {
       bodies.move(c.b, d_lambda * c.normal);
       bodies.move(c.a, -d_lambda * c.normal);
     }
-    if (!(mu > 0.0) || !(c.lambda > 0.0)) continue;
+    if (!(mu > 0.0) || !(c.lambda > 0.0) || c.lodged) continue;
     const Vec3 slide = (bodies.point(c.b) - bodies.point_prev(c.b)) - (bodies.point(c.a) - bodies.point_prev(c.a));
     const Vec3 tangential = slide - c.normal.dot(slide) * c.normal;
     Vec3 friction = c.friction - tangential / c.inv_mass;
@@ -378,6 +391,97 @@ void answer_velocities(const Model& model, State& state, const Scratch& scratch,
   }
 }
 
+// The rigid part of an object's motion: centre, inertia about it and spin (I^-1 L).
+void measure_spin(const Model& model, const State& state, Index object, Scratch::ObjectSpin& s) {
+  const ObjectModel& obj = model.objects[object];
+  double mass = 0.0;
+  Vec3 centre = Vec3::Zero();
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) {
+    mass += model.node_mass[n];
+    centre += model.node_mass[n] * state.x[n];
+  }
+  centre /= mass;
+  Vec3 momentum = Vec3::Zero();
+  Mat3 inertia = Mat3::Zero();
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) {
+    const Vec3 r = state.x[n] - centre;
+    momentum += model.node_mass[n] * r.cross(state.v[n]);
+    inertia += model.node_mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+  }
+  s.centre = centre;
+  s.mass = mass;
+  s.inertia = inertia;
+  const Eigen::FullPivLU<Mat3> lu(inertia);
+  s.omega = lu.isInvertible() ? Vec3(lu.solve(momentum)) : Vec3::Zero();
+}
+
+// Rolling resistance: an object resting on others (or on a plane) has its spin relative to
+// theirs slowed by at most rolling_resistance x (normal force) x (radius of gyration) of
+// torque, Coulomb-like, as Box2D's rolling resistance: a contact alone cannot stop an object
+// rolling on a curved support (the teapot on the lower one's knob rocks for ever), and a
+// bounded torque stops small rocking within a few steps while a tumbling object slows only
+// a little. Spins are measured before any is changed, so the result does not depend on
+// the objects' order.
+void resist_rolling(const Model& model, State& state, Scratch& scratch) {
+  const Bodies bodies{model, state, scratch};
+  const double resistance = model.settings.rolling_resistance;
+  if (!(resistance > 0.0)) return;
+  for (Scratch::ObjectSpin& s : scratch.object_spin) s.touched = false;
+  auto object_of = [&](const ContactSide& side) -> Index {
+    if (side.count == 0 || side.cell == kNoIndex) return kNoIndex;  // a plane, the probe
+    const Index o = model.cell_object[side.cell];
+    return scratch.object_solving[o] ? o : kNoIndex;
+  };
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (!(c.lambda > 0.0)) continue;
+    for (const Index o : {object_of(c.a), object_of(c.b)})
+      if (o != kNoIndex && !scratch.object_spin[o].touched) {
+        scratch.object_spin[o] = Scratch::ObjectSpin{};
+        measure_spin(model, state, o, scratch.object_spin[o]);
+        scratch.object_spin[o].touched = true;
+      }
+  }
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    auto is_probe = [](const ContactSide& side) { return side.count > 0 && side.cell == kNoIndex; };
+    if (!(c.lambda > 0.0) || is_probe(c.a) || is_probe(c.b)) continue;  // the hand is no support
+    const Index a = object_of(c.a), b = object_of(c.b);
+    if (a == b) continue;  // within one object: no relative rolling
+    const Vec3 spin_a = a != kNoIndex ? scratch.object_spin[a].omega : Vec3::Zero();
+    const Vec3 spin_b = b != kNoIndex ? scratch.object_spin[b].omega : Vec3::Zero();
+    const Vec3 where = bodies.point(c.b);
+    if (a != kNoIndex) {
+      scratch.object_spin[a].load += c.lambda;
+      scratch.object_spin[a].support_spin += c.lambda * spin_b;
+      scratch.object_spin[a].pivot += c.lambda * where;
+    }
+    if (b != kNoIndex) {
+      scratch.object_spin[b].load += c.lambda;
+      scratch.object_spin[b].support_spin += c.lambda * spin_a;
+      scratch.object_spin[b].pivot += c.lambda * where;
+    }
+  }
+  const double dt = model.settings.dt;
+  for (std::size_t o = 0; o < scratch.object_spin.size(); ++o) {
+    const Scratch::ObjectSpin& s = scratch.object_spin[o];
+    if (!s.touched || !(s.load > 0.0)) continue;
+    const Vec3 relative = s.omega - s.support_spin / s.load;
+    const Vec3 stop = -(s.inertia * relative);  // the angular impulse that stops it, N m s
+    // Most torque x dt: resistance x normal force (load / dt^2) x radius of gyration x dt.
+    const double radius = std::sqrt(0.5 * s.inertia.trace() / s.mass);
+    const double most = resistance * (s.load / dt) * radius, size = stop.norm();
+    const Vec3 impulse = size > most ? Vec3(stop * (most / size)) : stop;
+    const Eigen::FullPivLU<Mat3> lu(s.inertia);
+    if (!lu.isInvertible()) continue;
+    const Vec3 change = lu.solve(impulse);
+    const ObjectModel& obj = model.objects[o];
+    // About the contacts' load centre: the objects' velocities there stay as the contacts left them.
+    const Vec3 pivot = s.pivot / s.load;
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change.cross(state.x[n] - pivot);
+  }
+}
+
 }  // namespace
 
 void solve_contacts(const Model& model, State& state, Scratch& scratch) {
@@ -401,10 +505,12 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
     ProbeState& probe = state.probe;
     probe.v = (probe.x - scratch.probe_x_prev) / dt;
     answer_velocities(model, state, scratch, beta);
+    resist_rolling(model, state, scratch);
     probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
                   model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
   } else {
     answer_velocities(model, state, scratch, beta);
+    resist_rolling(model, state, scratch);
   }
   if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
 }

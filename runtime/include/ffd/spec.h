@@ -140,6 +140,10 @@ struct SimulationSettings {
   double min_box_thickness = 0.1;        // fraction of the cell size, see compile()
   Accuracy accuracy = Accuracy::CentreOfMass;  // starting level; commands may switch it
   ContactResponse response = ContactResponse::Paper;  // starting response; commands may switch it
+  // Response "solver" only: rolling resistance, the most torque a contact resists rolling and
+  // spinning with, as a share of its normal force times the object's radius of gyration
+  // (contact_solver.cpp). Without it an object resting on a curved support rocks on it for ever.
+  double rolling_resistance = 0.05;
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within

@@ -65,6 +65,7 @@ struct ContactConstraint {
   double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
   double lambda = 0.0;           // normal correction so far this step, m (>= 0)
   Vec3 friction = Vec3::Zero();  // tangential correction so far this step, m
+  bool lodged = false;           // found deeper than a step's approach: pushed out without friction
 };
 
 struct StepReport {
@@ -216,6 +217,19 @@ struct Scratch {
   Index object_task_count = 0;
   Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
   Vec3 grab_lambda = Vec3::Zero();
+  // Rolling resistance (contact_solver.cpp): per object, its rigid motion this step and what
+  // its active contacts carry.
+  struct ObjectSpin {
+    Vec3 centre = Vec3::Zero();       // m
+    Vec3 omega = Vec3::Zero();        // rad/s, the best rigid spin of its nodes
+    Mat3 inertia = Mat3::Zero();      // kg m^2 about the centre
+    double mass = 0.0;                // kg
+    double load = 0.0;                // sum of its active contacts' normal corrections (kg m)
+    Vec3 support_spin = Vec3::Zero(); // their partners' spins weighted by load
+    Vec3 pivot = Vec3::Zero();        // their points weighted by load
+    bool touched = false;
+  };
+  std::vector<ObjectSpin> object_spin;
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;
