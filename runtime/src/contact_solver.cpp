@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "dynamics.h"
 #include "ffd/box_test.h"
@@ -132,8 +131,7 @@ void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, c
   c.inv_mass = 0.0;
   c.lambda = 0.0;
   c.friction = Vec3::Zero();
-  static const double lodge = std::getenv("EXP_LODGE") ? std::atof(std::getenv("EXP_LODGE")) : kLodgedDepth;
-  c.lodged = depth > lodge + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
+  c.lodged = depth > kLodgedDepth + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
 }
 
 }  // namespace
@@ -476,7 +474,10 @@ void resist_rolling(const Model& model, State& state, Scratch& scratch) {
     if (!lu.isInvertible()) continue;
     const Vec3 change = lu.solve(impulse);
     const ObjectModel& obj = model.objects[o];
-    // About the contacts' load centre: the objects' velocities there stay as the contacts left them.
+    // About the contacts' load centre, so that the velocities the contacts left there stay:
+    // an object rolling on its support stops rolling instead of sliding. (About its own
+    // centre, the same torque made the contact points slide: the upper teapot slid off the
+    // lower one's knob.)
     const Vec3 pivot = s.pivot / s.load;
     for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change.cross(state.x[n] - pivot);
   }
