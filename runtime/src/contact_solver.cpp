@@ -389,8 +389,8 @@ void answer_velocities(const Model& model, State& state, const Scratch& scratch,
   }
 }
 
-// The rigid part of an object's motion: centre, inertia about it and spin (I^-1 L).
-void measure_spin(const Model& model, const State& state, Index object, Scratch::ObjectSpin& s) {
+// The rigid part of an object's motion: centre and its velocity, inertia about it, spin (I^-1 L).
+void measure_motion(const Model& model, const State& state, Index object, Scratch::ObjectMotion& s) {
   const ObjectModel& obj = model.objects[object];
   double mass = 0.0;
   Vec3 centre = Vec3::Zero();
@@ -399,87 +399,108 @@ void measure_spin(const Model& model, const State& state, Index object, Scratch:
     centre += model.node_mass[n] * state.x[n];
   }
   centre /= mass;
-  Vec3 momentum = Vec3::Zero();
+  Vec3 momentum = Vec3::Zero(), linear = Vec3::Zero();
   Mat3 inertia = Mat3::Zero();
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     const Vec3 r = state.x[n] - centre;
+    linear += model.node_mass[n] * state.v[n];
     momentum += model.node_mass[n] * r.cross(state.v[n]);
     inertia += model.node_mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
   }
   s.centre = centre;
+  s.velocity = linear / mass;
   s.mass = mass;
   s.inertia = inertia;
   const Eigen::FullPivLU<Mat3> lu(inertia);
   s.omega = lu.isInvertible() ? Vec3(lu.solve(momentum)) : Vec3::Zero();
 }
 
-// Rolling resistance: an object resting on others (or on a plane) has its spin relative to
-// theirs slowed by at most rolling_resistance x (normal force) x (radius of gyration) of
-// torque, Coulomb-like, as Box2D's rolling resistance: a contact alone cannot stop an object
-// rolling on a curved support (the teapot on the lower one's knob rocks for ever), and a
-// bounded torque stops small rocking within a few steps while a tumbling object slows only
-// a little. Spins are measured before any is changed, so the result does not depend on
-// the objects' order.
-void resist_rolling(const Model& model, State& state, Scratch& scratch) {
+// What a resting object's supports do to its rigid motion, after the velocity pass. Two
+// bounded corrections, each measured against the supports' own motion (the load-weighted
+// mean over the partners of its active contacts; a plane is still) and capped by the
+// contacts' normal force, Coulomb-like, so that they stop small motions within a few steps
+// and barely slow large ones:
+// - rolling resistance: the object's spin relative to its supports', slowed by at most
+//   rolling_resistance x (normal force) x (radius of gyration) of torque, as Box2D's rolling
+//   resistance (a contact alone cannot stop an object rolling on a curved support: the upper
+//   teapot rocked on the lower one's knob for seconds), turned about the contacts' load
+//   centre, so that the velocities the contacts left there stay (about its own centre the
+//   contact points slid and the upper teapot slid off the knob);
+// - support damping: the object's velocity along its resting contacts' mean normal relative
+//   to its supports', taken away at alpha's share, by at most the contacts' normal force:
+//   alpha is the contact's damping, for a resting object as for an impact (the upper teapot
+//   bobbed on the lower one at 2.5 Hz for seconds; damping its deformation did nothing, the
+//   motion is its centre's).
+// Everything is measured before anything changes, so the objects' order does not matter.
+void damp_on_supports(const Model& model, State& state, Scratch& scratch) {
+  const double resistance = model.settings.rolling_resistance, alpha = state.params.alpha;
+  if (!(resistance > 0.0) && !(alpha > 0.0)) return;
   const Bodies bodies{model, state, scratch};
-  const double resistance = model.settings.rolling_resistance;
-  if (!(resistance > 0.0)) return;
-  for (Scratch::ObjectSpin& s : scratch.object_spin) s.touched = false;
+  for (Scratch::ObjectMotion& s : scratch.object_motion) s.touched = false;
   auto object_of = [&](const ContactSide& side) -> Index {
     if (side.count == 0 || side.cell == kNoIndex) return kNoIndex;  // a plane, the probe
     const Index o = model.cell_object[side.cell];
     return scratch.object_solving[o] ? o : kNoIndex;
   };
+  auto is_probe = [](const ContactSide& side) { return side.count > 0 && side.cell == kNoIndex; };
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
     if (!(c.lambda > 0.0)) continue;
     for (const Index o : {object_of(c.a), object_of(c.b)})
-      if (o != kNoIndex && !scratch.object_spin[o].touched) {
-        scratch.object_spin[o] = Scratch::ObjectSpin{};
-        measure_spin(model, state, o, scratch.object_spin[o]);
-        scratch.object_spin[o].touched = true;
+      if (o != kNoIndex && !scratch.object_motion[o].touched) {
+        scratch.object_motion[o] = Scratch::ObjectMotion{};
+        measure_motion(model, state, o, scratch.object_motion[o]);
+        scratch.object_motion[o].touched = true;
       }
   }
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
-    auto is_probe = [](const ContactSide& side) { return side.count > 0 && side.cell == kNoIndex; };
     if (!(c.lambda > 0.0) || is_probe(c.a) || is_probe(c.b)) continue;  // the hand is no support
     const Index a = object_of(c.a), b = object_of(c.b);
-    if (a == b) continue;  // within one object: no relative rolling
-    const Vec3 spin_a = a != kNoIndex ? scratch.object_spin[a].omega : Vec3::Zero();
-    const Vec3 spin_b = b != kNoIndex ? scratch.object_spin[b].omega : Vec3::Zero();
+    if (a == b) continue;  // within one object: nothing relative
     const Vec3 where = bodies.point(c.b);
-    if (a != kNoIndex) {
-      scratch.object_spin[a].load += c.lambda;
-      scratch.object_spin[a].support_spin += c.lambda * spin_b;
-      scratch.object_spin[a].pivot += c.lambda * where;
-    }
-    if (b != kNoIndex) {
-      scratch.object_spin[b].load += c.lambda;
-      scratch.object_spin[b].support_spin += c.lambda * spin_a;
-      scratch.object_spin[b].pivot += c.lambda * where;
+    const bool resting = c.approach > -kRestingApproach;
+    // Each side's support is the other; side b is pushed along +n, side a along -n.
+    for (int side = 0; side < 2; ++side) {
+      const Index self = side == 0 ? a : b, other = side == 0 ? b : a;
+      if (self == kNoIndex) continue;
+      Scratch::ObjectMotion& s = scratch.object_motion[self];
+      const Scratch::ObjectMotion* support = other != kNoIndex ? &scratch.object_motion[other] : nullptr;
+      s.load += c.lambda;
+      s.pivot += c.lambda * where;
+      if (support) s.support_spin += c.lambda * support->omega;
+      if (!resting) continue;
+      s.resting_load += c.lambda;
+      s.up += (side == 0 ? -c.lambda : c.lambda) * c.normal;
+      if (support) s.support_velocity += c.lambda * support->velocity;
     }
   }
   const double dt = model.settings.dt;
-  for (std::size_t o = 0; o < scratch.object_spin.size(); ++o) {
-    const Scratch::ObjectSpin& s = scratch.object_spin[o];
+  for (std::size_t o = 0; o < scratch.object_motion.size(); ++o) {
+    const Scratch::ObjectMotion& s = scratch.object_motion[o];
     if (!s.touched || !(s.load > 0.0)) continue;
-    const Vec3 relative = s.omega - s.support_spin / s.load;
-    const Vec3 stop = -(s.inertia * relative);  // the angular impulse that stops it, N m s
-    // Most torque x dt: resistance x normal force (load / dt^2) x radius of gyration x dt.
-    const double radius = std::sqrt(0.5 * s.inertia.trace() / s.mass);
-    const double most = resistance * (s.load / dt) * radius, size = stop.norm();
-    const Vec3 impulse = size > most ? Vec3(stop * (most / size)) : stop;
-    const Eigen::FullPivLU<Mat3> lu(s.inertia);
-    if (!lu.isInvertible()) continue;
-    const Vec3 change = lu.solve(impulse);
     const ObjectModel& obj = model.objects[o];
-    // About the contacts' load centre, so that the velocities the contacts left there stay:
-    // an object rolling on its support stops rolling instead of sliding. (About its own
-    // centre, the same torque made the contact points slide: the upper teapot slid off the
-    // lower one's knob.)
-    const Vec3 pivot = s.pivot / s.load;
-    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change.cross(state.x[n] - pivot);
+    // Rolling resistance: the angular impulse that stops the relative spin, capped at
+    // resistance x normal force (load / dt^2) x radius of gyration x dt.
+    const Eigen::FullPivLU<Mat3> lu(s.inertia);
+    if (resistance > 0.0 && lu.isInvertible()) {
+      const Vec3 stop = -(s.inertia * (s.omega - s.support_spin / s.load));  // N m s
+      const double radius = std::sqrt(0.5 * s.inertia.trace() / s.mass);
+      const double most = resistance * (s.load / dt) * radius, size = stop.norm();
+      const Vec3 change = lu.solve(size > most ? Vec3(stop * (most / size)) : stop);  // rad/s
+      const Vec3 pivot = s.pivot / s.load;
+      for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change.cross(state.x[n] - pivot);
+    }
+    // Support damping: alpha of the relative normal velocity, capped at what the resting
+    // contacts' normal force (resting_load / dt^2) changes in a step (resting_load / dt / m).
+    const double up_size = s.up.norm();
+    if (alpha > 0.0 && s.resting_load > 0.0 && up_size > 0.0) {
+      const Vec3 up = s.up / up_size;
+      const double relative = up.dot(s.velocity - s.support_velocity / s.resting_load);  // m/s
+      const double most = s.resting_load / dt / s.mass;
+      const Vec3 change = -alpha * std::clamp(relative, -most, most) * up;
+      for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change;
+    }
   }
 }
 
@@ -506,12 +527,12 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
     ProbeState& probe = state.probe;
     probe.v = (probe.x - scratch.probe_x_prev) / dt;
     answer_velocities(model, state, scratch, beta);
-    resist_rolling(model, state, scratch);
+    damp_on_supports(model, state, scratch);
     probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
                   model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
   } else {
     answer_velocities(model, state, scratch, beta);
-    resist_rolling(model, state, scratch);
+    damp_on_supports(model, state, scratch);
   }
   if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
 }

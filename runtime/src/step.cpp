@@ -122,7 +122,7 @@ Scratch make_scratch(const Model& model) {
   s.contacts.resize(kContactCapacity);
   s.constraints.resize(std::max<std::size_t>(4096, 4 * boxes));
   s.object_solving.assign(model.objects.size(), 0);
-  s.object_spin.resize(model.objects.size());
+  s.object_motion.resize(model.objects.size());
   std::size_t most_triangles = 0;
   for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
     most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);

@@ -217,9 +217,9 @@ struct Scratch {
   Index object_task_count = 0;
   Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
   Vec3 grab_lambda = Vec3::Zero();
-  // Rolling resistance (contact_solver.cpp): per object, its rigid motion this step and what
-  // its active contacts carry.
-  struct ObjectSpin {
+  // Rolling resistance and support damping (contact_solver.cpp): per object, its rigid motion
+  // this step and what its active contacts carry.
+  struct ObjectMotion {
     Vec3 centre = Vec3::Zero();       // m
     Vec3 omega = Vec3::Zero();        // rad/s, the best rigid spin of its nodes
     Mat3 inertia = Mat3::Zero();      // kg m^2 about the centre
@@ -227,9 +227,13 @@ struct Scratch {
     double load = 0.0;                // sum of its active contacts' normal corrections (kg m)
     Vec3 support_spin = Vec3::Zero(); // their partners' spins weighted by load
     Vec3 pivot = Vec3::Zero();        // their points weighted by load
+    Vec3 velocity = Vec3::Zero();     // m/s, of the centre
+    Vec3 up = Vec3::Zero();           // resting contacts' normals towards it, weighted by load
+    Vec3 support_velocity = Vec3::Zero();  // their partners' centre velocities weighted by load
+    double resting_load = 0.0;        // the share of load from resting contacts (kg m)
     bool touched = false;
   };
-  std::vector<ObjectSpin> object_spin;
+  std::vector<ObjectMotion> object_motion;
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;
