@@ -333,13 +333,13 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
     require_error(
         "[simulation]\neffects = []\nwind = 3\n",
         "inline.toml:3:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance)");
   }
   SECTION("the first unknown key in file order is reported") {
     require_error(
         "[simulation]\nwind = 1\neffects = []\nalpha_ = 1\n",
         "inline.toml:2:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance)");
   }
   SECTION("a key that is the start of a valid one") {
     require_error(scene_with_object("name = \"a\"\nrotation = [0, 45, 0]\n"),
@@ -484,6 +484,7 @@ TEST_CASE("probe and grab tables are read, and only with their effects", "[scene
   const ffd::SceneSpec scene = parse(
       "[simulation]\neffects = [\"probe\", \"grab\"]\n"
       "[probe]\nradius = 0.02\nmass = 0.1\ncoupling_stiffness = 500.0\ncoupling_damping = 3.0\nstart = [0.1, 0.2, 0.3]\n"
+      "force_limit = 3.3\nforce_rate_limit = 0.5\nwatchdog_ms = 10.0\n"
       "[grab]\nstiffness = 50.0\ndamping = 1.5\n"
       "[[object]]\n" + kBoxLines);
   const ffd::ProbeSettings& p = scene.settings.probe;
@@ -492,6 +493,9 @@ TEST_CASE("probe and grab tables are read, and only with their effects", "[scene
   CHECK(p.coupling_stiffness == 500.0);
   CHECK(p.coupling_damping == 3.0);
   CHECK(p.start == ffd::Vec3(0.1, 0.2, 0.3));
+  CHECK(p.force_limit == 3.3);
+  CHECK(p.force_rate_limit == 0.5);
+  CHECK(p.watchdog_ms == 10.0);
   CHECK(scene.settings.grab.stiffness == 50.0);
   CHECK(scene.settings.grab.damping == 1.5);
   require_error("[simulation]\neffects = [\"gravity\"]\n[probe]\nradius = 0.02\n[[object]]\n" + kBoxLines,
@@ -499,6 +503,8 @@ TEST_CASE("probe and grab tables are read, and only with their effects", "[scene
                 "simulation.effects");
   require_error("[simulation]\neffects = [\"probe\"]\n[probe]\nradius = -1.0\n[[object]]\n" + kBoxLines,
                 "inline.toml:4:10: probe.radius: must be > 0 (got -1)");
+  require_error("[simulation]\neffects = [\"probe\"]\n[probe]\nwatchdog_ms = 0.0\n[[object]]\n" + kBoxLines,
+                "inline.toml:4:15: probe.watchdog_ms: must be > 0 (got 0)");
   require_error("[simulation]\neffects = [\"grab\"]\n[grab]\nstifness = 1.0\n[[object]]\n" + kBoxLines,
                 "inline.toml:4:1: grab.stifness: unknown key 'stifness'; did you mean 'stiffness'?");
 }
@@ -1163,4 +1169,10 @@ TEST_CASE("simulation.response picks the contact response, and an unknown one na
   CHECK_THROWS_WITH(parse(head + "\"springs\"" + tail),
                     "inline.toml:3:12: simulation.response: unknown response 'springs' (valid: \"paper\", \"solver\")");
   CHECK_THROWS_WITH(parse(head + "1" + tail), Catch::Matchers::Contains("simulation.response: expected a string"));
+  // rolling_resistance (the solver's): read, default 0.05, never negative.
+  const std::string rolling = "[simulation]\neffects = [\"planes\"]\nrolling_resistance = ";
+  CHECK(parse(rolling + "0.2" + tail).settings.rolling_resistance == 0.2);
+  CHECK(parse(head + "\"solver\"" + tail).settings.rolling_resistance == 0.05);
+  CHECK_THROWS_WITH(parse(rolling + "-0.1" + tail),
+                    "inline.toml:3:22: simulation.rolling_resistance: must be >= 0 (got -0.1)");
 }

@@ -15,10 +15,10 @@ struct ProgramResult {
   std::string output;  // stdout and stderr
 };
 
-// `prefix` goes before the program (an `env ...` to change its environment).
-inline ProgramResult run_ffdsim(const std::string& arguments, const std::string& prefix = "") {
+// A shell command line, its output (stdout and stderr) and exit code.
+inline ProgramResult run_shell(const std::string& command_line) {
   ProgramResult r;
-  const std::string command = prefix + std::string(FFDSIM_BINARY) + " " + arguments + " 2>&1";
+  const std::string command = "(" + command_line + ") 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   REQUIRE(pipe != nullptr);
   char buffer[4096];
@@ -26,6 +26,11 @@ inline ProgramResult run_ffdsim(const std::string& arguments, const std::string&
   const int status = pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// `prefix` goes before the program (an `env ...` to change its environment).
+inline ProgramResult run_ffdsim(const std::string& arguments, const std::string& prefix = "") {
+  return run_shell(prefix + std::string(FFDSIM_BINARY) + " " + arguments);
 }
 
 // An empty folder of this test process's own under the system's temporary folder (the

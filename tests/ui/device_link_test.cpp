@@ -99,17 +99,9 @@ std::uint16_t test_port(int offset) { return static_cast<std::uint16_t>(20000 + 
 // The ffdsim program with the device simulator beside it: `ffdsim run --device` in the
 // background, the simulator in the foreground, then both ended.
 ::test::ProgramResult run_with_device(const std::string& run_arguments, const std::string& sim_arguments) {
-  ::test::ProgramResult r;
   const std::string binary = FFDSIM_BINARY;
-  const std::string command = binary + " run --headless " + run_arguments + " & " + binary + " device-sim " +
-                              sim_arguments + "; status=$?; wait; exit $status";
-  FILE* pipe = popen(("(" + command + ") 2>&1").c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return ::test::run_shell(binary + " run --headless " + run_arguments + " & " + binary + " device-sim " + sim_arguments +
+                           "; status=$?; wait; exit $status");
 }
 
 const std::string kScene = FFDSIM_SCENARIO_DIR "/scenes/probe_box.toml";
@@ -533,22 +525,18 @@ TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and recei
   const std::string binary = FFDSIM_BINARY;
   for (int bridge = 0; bridge < 2; ++bridge) {
     const std::uint16_t port = test_port(3 + bridge);
-    // The probe circles 2 cm above the block's top (10 cm): it presses in and the force rises.
+    // The device circles at 11 cm, so the probe (a 1.2 cm sphere) presses 2.5 mm into the
+    // block's top (10 cm): a force comes back.
     const std::string run = binary + " run --headless -q --seconds 3 --device udp://127.0.0.1:" + std::to_string(port) +
                             " " + kScene;
     const std::string device = bridge == 0 ? std::string(FFDSIM_EXAMPLE_BRIDGE) + " 127.0.0.1 " + std::to_string(port) +
                                                  " 2 0 0.09 0"
                                            : "python3 " FFDSIM_BRIDGES_DIR "/ffdsim_device.py --port " +
                                                  std::to_string(port) + " --seconds 2 --centre 0 0.09 0";
-    FILE* pipe = popen(("(" + run + " & sleep 0.3; " + device + "; status=$?; wait; exit $status) 2>&1").c_str(), "r");
-    REQUIRE(pipe != nullptr);
-    std::string output;
-    char buffer[1024];
-    while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-    const int status = pclose(pipe);
+    const ::test::ProgramResult r = ::test::run_shell(run + " & sleep 0.3; " + device + "; status=$?; wait; exit $status");
+    const std::string& output = r.output;
     INFO(output);
-    CHECK(WIFEXITED(status));
-    CHECK(WEXITSTATUS(status) == 0);
+    CHECK(r.exit_code == 0);
     CHECK_THAT(output, Catch::Contains("largest"));
     CHECK_THAT(output, !Catch::Contains("largest 0.000 N"));
   }
