@@ -31,9 +31,6 @@ namespace {
 // a contact grips what it should release (the lower teapot's knob, lodged laterally in the
 // upper teapot's bottom boxes, was lifted with it by the grab).
 constexpr double kLodgedDepth = 0.0002;
-}  // namespace
-
-namespace {
 
 // A point carried by cell `cell` at local coordinates `local` (eq. 2).
 ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
@@ -392,17 +389,13 @@ void answer_velocities(const Model& model, State& state, const Scratch& scratch,
 // The rigid part of an object's motion: centre and its velocity, inertia about it, spin (I^-1 L).
 void measure_motion(const Model& model, const State& state, Index object, Scratch::ObjectMotion& s) {
   const ObjectModel& obj = model.objects[object];
+  const Vec3 centre = centre_of_mass(model, state.x, object);
   double mass = 0.0;
-  Vec3 centre = Vec3::Zero();
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) {
-    mass += model.node_mass[n];
-    centre += model.node_mass[n] * state.x[n];
-  }
-  centre /= mass;
   Vec3 momentum = Vec3::Zero(), linear = Vec3::Zero();
   Mat3 inertia = Mat3::Zero();
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     const Vec3 r = state.x[n] - centre;
+    mass += model.node_mass[n];
     linear += model.node_mass[n] * state.v[n];
     momentum += model.node_mass[n] * r.cross(state.v[n]);
     inertia += model.node_mass[n] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
@@ -493,7 +486,7 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch) {
     const ObjectModel& obj = model.objects[o];
     // Rolling resistance: the angular impulse that stops the relative spin, capped at
     // resistance x normal force (load / dt^2) x radius of gyration x dt.
-    const Eigen::FullPivLU<Mat3> lu(s.inertia);
+    const Eigen::FullPivLU<Mat3> lu(s.inertia);  // 3 x 3: cheaper to redo than to keep
     if (resistance > 0.0 && lu.isInvertible()) {
       const Vec3 stop = -(s.inertia * (s.omega - s.support_spin / s.load));  // N m s
       const double radius = std::sqrt(0.5 * s.inertia.trace() / s.mass);

@@ -36,8 +36,9 @@ enum class Pacing : std::uint8_t {
 // A live source of the probe's device position polled by the physics thread every step (a
 // haptic device link, README "Haptic devices"). Both calls run on the physics thread and must
 // neither allocate, lock, block nor do I/O: they exchange data with their own threads through
-// lock-free queues. What sample() returns becomes a ProbePose command stamped with the step,
-// applied and recorded like any other, so a recording replays the session without the source.
+// lock-free queues. The position device_position() gives becomes a ProbePose command stamped
+// with the step, applied and recorded like any other, so a recording replays the session
+// without the source.
 class ProbeSource {
  public:
   virtual ~ProbeSource() = default;
