@@ -541,3 +541,22 @@ TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and recei
     CHECK_THAT(output, !Catch::Contains("largest 0.000 N"));
   }
 }
+
+TEST_CASE("Device command-line errors: a bad URL is a usage error, a scene without a probe or a silent link is bad input",
+          "[cli][device]") {
+  ::test::ProgramResult r = ::test::run_ffdsim("run --headless --seconds 0.1 --device tcp://127.0.0.1:1 " + kScene);
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Catch::Contains("--device tcp://127.0.0.1:1: expected udp://HOST:PORT"));
+  r = ::test::run_ffdsim("device-sim " + kPath + " --to udp://127.0.0.1");
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Catch::Contains("--to udp://127.0.0.1: expected udp://HOST:PORT with both a host and a port"));
+  r = ::test::run_ffdsim("run --headless --seconds 0.1 --device udp://127.0.0.1:" + std::to_string(test_port(5)) + " " +
+                         FFDSIM_SCENARIO_DIR "/scenes/no_collision.toml");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains("no_collision.toml: --device drives the probe, and the scene has no \"probe\" effect"));
+  // Nobody listening: the simulator gives up after --wait-ms, naming the address.
+  const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(6));
+  r = ::test::run_ffdsim("device-sim " + kPath + " --to " + url + " --wait-ms 50");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains(url + ": no force came back within 50 ms"));
+}

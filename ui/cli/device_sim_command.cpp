@@ -94,6 +94,11 @@ int run_device_sim(const DeviceSimOptions& o) {
   ffd::device::LinkSettings target;
   try {
     ffd::device::parse_device_url(o.url, target);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "ffdsim: error: --to %s\n", e.what());
+    return kExitUsage;
+  }
+  try {
     const ffd::LoadedReplay loaded = ffd::load_replay_file(o.script);
     positions = trajectory(loaded.script, loaded.model.settings.dt * 1000.0);
     if (!o.out_path.empty()) ensure_parent_folder(o.out_path);
@@ -291,6 +296,10 @@ int run_device_sim(const DeviceSimOptions& o) {
   if (!o.report_path.empty()) {
     std::ofstream out(o.report_path);
     out << report.dump(2) << '\n';
+    if (!out) {
+      std::fprintf(stderr, "ffdsim: error: %s: cannot write\n", o.report_path.c_str());
+      return kExitBadInput;
+    }
   }
   if (!o.quiet)
     std::printf("device-sim: %llu samples sent of %llu (dropped %llu, duplicated %llu, reordered %llu, silent %llu); "
@@ -299,7 +308,11 @@ int run_device_sim(const DeviceSimOptions& o) {
                 static_cast<unsigned long long>(counts.dropped), static_cast<unsigned long long>(counts.duplicated),
                 static_cast<unsigned long long>(counts.reordered), static_cast<unsigned long long>(counts.silent),
                 received.size(), max_force, rtt.p50_us, rtt.p99_us, rtt.max_us);
-  return received.empty() ? kExitBadInput : kExitOk;
+  if (received.empty()) {
+    std::fprintf(stderr, "ffdsim: error: %s: no force came back while the path played\n", o.url.c_str());
+    return kExitBadInput;
+  }
+  return kExitOk;
 }
 
 }  // namespace ffdsim

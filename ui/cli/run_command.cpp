@@ -312,6 +312,15 @@ int run_run(const RunOptions& given) {
   std::string scene_path;
   std::optional<ffd::UiScript> script;
   std::unique_ptr<ffd::device::DeviceLink> device;
+  ffd::device::LinkSettings link;  // --device: where it listens, then its limits from the scene
+  if (!o.device_url.empty()) {
+    try {
+      ffd::device::parse_device_url(o.device_url, link);
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "ffdsim: error: --device %s\n", e.what());
+      return kExitUsage;
+    }
+  }
   try {
     if (!o.input_script.empty()) {
       script = ffd::load_ui_script_file(o.input_script);
@@ -330,8 +339,6 @@ int run_run(const RunOptions& given) {
     if (!o.device_url.empty()) {
       if (!ffd::has(model.settings.effects, ffd::Effect::Probe))
         throw ffd::InputError(scene_path + ": --device drives the probe, and the scene has no \"probe\" effect");
-      ffd::device::LinkSettings link;
-      ffd::device::parse_device_url(o.device_url, link);
       link.allow_remote = o.device_allow_remote;
       const ffd::ProbeSettings& probe = model.settings.probe;
       link.force_limit_n = o.force_limit_n > 0.0 ? o.force_limit_n : probe.force_limit;

@@ -36,19 +36,19 @@ constexpr int kPollMicroseconds = 100;
 void parse_device_url(const std::string& url, LinkSettings& settings) {
   const std::string scheme = "udp://";
   if (url.rfind(scheme, 0) != 0)
-    throw std::invalid_argument("--device " + url + ": expected udp://HOST:PORT (for example udp://127.0.0.1:47000)");
+    throw std::invalid_argument(url + ": expected udp://HOST:PORT (for example udp://127.0.0.1:47000)");
   const std::string rest = url.substr(scheme.size());
   const std::size_t colon = rest.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == rest.size())
-    throw std::invalid_argument("--device " + url + ": expected udp://HOST:PORT with both a host and a port");
+    throw std::invalid_argument(url + ": expected udp://HOST:PORT with both a host and a port");
   std::string host = rest.substr(0, colon);
   const std::string port = rest.substr(colon + 1);
   if (host == "localhost") host = "127.0.0.1";
   in_addr address{};
   if (inet_pton(AF_INET, host.c_str(), &address) != 1)
-    throw std::invalid_argument("--device " + url + ": host '" + host + "' is not an IPv4 address");
+    throw std::invalid_argument(url + ": host '" + host + "' is not an IPv4 address");
   if (port.find_first_not_of("0123456789") != std::string::npos || port.size() > 5 || std::stoul(port) > 65535)
-    throw std::invalid_argument("--device " + url + ": port '" + port + "' is not a number from 0 to 65535");
+    throw std::invalid_argument(url + ": port '" + port + "' is not a number from 0 to 65535");
   settings.address = host;
   settings.port = static_cast<std::uint16_t>(std::stoul(port));
 }

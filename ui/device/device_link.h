@@ -42,7 +42,7 @@ struct LinkSettings {
 };
 
 // "udp://HOST:PORT" (HOST an IPv4 address or "localhost") into `settings`; throws
-// std::invalid_argument naming the problem.
+// std::invalid_argument naming the URL and the problem (a command-line error).
 void parse_device_url(const std::string& url, LinkSettings& settings);
 
 // Which samples the link takes: each newer than the last taken (serial-number arithmetic, so
