@@ -243,6 +243,9 @@ void Viewer::shortcuts(const InputState& input) {
         if (mode_ == PointerMode::Probe && !has(session_->model().settings.effects, Effect::Probe)) {
           note("this scene has no \"probe\" effect");
           mode_ = PointerMode::Grab;
+        } else if (mode_ == PointerMode::Probe && options_.device) {
+          note("the haptic device drives the probe (--device)");
+          mode_ = PointerMode::Grab;
         }
         break;
       case Key::Space: send({.kind = frame && frame->paused ? CommandKind::Resume : CommandKind::Pause}); break;
@@ -414,7 +417,8 @@ void Viewer::scene_panel() {
   if (ImGui::RadioButton("grab", &mode, 0)) mode_ = PointerMode::Grab;
   remember("mode_grab");
   ImGui::SameLine();
-  ImGui::BeginDisabled(!has(session_->model().settings.effects, Effect::Probe));
+  // With a haptic device on the probe (--device) the mouse only grabs.
+  ImGui::BeginDisabled(!has(session_->model().settings.effects, Effect::Probe) || options_.device);
   if (ImGui::RadioButton("probe (P)", &mode, 1)) mode_ = PointerMode::Probe;
   remember("mode_probe");
   ImGui::EndDisabled();
