@@ -542,7 +542,8 @@ TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and recei
   }
 }
 
-TEST_CASE("Device command-line errors: a bad URL is a usage error, a scene without a probe or a silent link is bad input",
+TEST_CASE("Device command-line errors: a bad URL is a usage error, a scene without a probe bad input, a silent link "
+          "a runtime failure",
           "[cli][device]") {
   ::test::ProgramResult r = ::test::run_ffdsim("run --headless --seconds 0.1 --device tcp://127.0.0.1:1 " + kScene);
   CHECK(r.exit_code == 1);
@@ -557,6 +558,6 @@ TEST_CASE("Device command-line errors: a bad URL is a usage error, a scene witho
   // Nobody listening: the simulator gives up after --wait-ms, naming the address.
   const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(6));
   r = ::test::run_ffdsim("device-sim " + kPath + " --to " + url + " --wait-ms 50");
-  CHECK(r.exit_code == 2);
+  CHECK(r.exit_code == 3);
   CHECK_THAT(r.output, Catch::Contains(url + ": no force came back within 50 ms"));
 }

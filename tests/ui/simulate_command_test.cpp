@@ -127,6 +127,46 @@ TEST_CASE("replay exits 0 when every assertion holds, 4 when one fails, 2 on a b
 
   // --window insists on a window: without a display it fails and says why.
   r = run_ffdsim("run --window --seconds 1 " + scene, "env -u DISPLAY -u WAYLAND_DISPLAY ");
-  CHECK(r.exit_code == 2);
+  CHECK(r.exit_code == 3);
   CHECK(r.output.find("no display") != std::string::npos);
+}
+
+TEST_CASE("simulate shows progress with rate and time left on a terminal, and nothing in a log or with -q", "[cli]") {
+  const std::string scene = kScenes + "two_teapots.toml";
+  // `script` gives the program a pseudo-terminal; CI would turn the bar off.
+  auto on_terminal = [](const std::string& arguments) {
+    return test::run_shell("env -u CI script -qfec '" FFDSIM_BINARY " " + arguments + "' /dev/null");
+  };
+  Result r = on_terminal("simulate " + scene + " --steps 1500");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("\r\033[Ktwo_teapots"));
+  CHECK_THAT(r.output, Catch::Contains("1500/1500  "));
+  CHECK_THAT(r.output, Catch::Contains(" steps/s"));
+  CHECK_THAT(r.output, Catch::Contains("state_hash"));
+  r = on_terminal("simulate " + scene + " --steps 200 -q");
+  CHECK(r.output.find("steps/s") == std::string::npos);
+  r = run_ffdsim("simulate " + scene + " --steps 200");  // a pipe, as in a log
+  CHECK(r.output.find("steps/s") == std::string::npos);
+  CHECK(r.output.find('\r') == std::string::npos);
+}
+
+TEST_CASE("simulate estimates memory and step time of a large scene before its first step, and says what makes it "
+          "smaller", "[cli]") {
+  const std::filesystem::path dir = temp_dir("large");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "block.toml") << "[simulation]\neffects = [\"gravity\"]\n[[object]]\nname = \"block\"\nshape = "
+                                       "\"box\"\nsize = [1.0, 1.0, 1.0]\ncell_size = 0.025\nfill_interior = true\n"
+                                       "[object.mass_spring]\n";
+  Result r = run_ffdsim("simulate " + (dir / "block.toml").string() + " --steps 2");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("a large scene: 74088 lattice nodes, 68921 cells;"));
+  CHECK_THAT(r.output, Catch::Contains("GB in memory now; a step takes about"));
+  CHECK_THAT(r.output, Catch::Contains("a larger cell_size in each [[object]] makes it smaller"));
+  CHECK(r.output.find("a large scene") < r.output.find("state_hash"));
+  // The default scene is not large: no estimate.
+  r = run_ffdsim("simulate " + kScenes + "two_teapots.toml --steps 2");
+  CHECK(r.output.find("a large scene") == std::string::npos);
+  std::filesystem::remove_all(dir);
 }

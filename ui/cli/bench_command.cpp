@@ -33,16 +33,17 @@ void register_bench(CLI::App& app, BenchOptions& o) {
 }
 
 int run_bench(const BenchOptions& o) {
+  const auto& all = ffdbench::paper_scenarios();
+  for (const std::string& key : o.only)  // a misspelt key is a command-line error
+    if (std::none_of(all.begin(), all.end(), [&](const ffdbench::Scenario& s) { return s.key == key; })) {
+      std::fprintf(stderr, "ffdsim: error: --only: unknown scenario '%s' (teapots, alphabets, happy_buddha, "
+                   "bunnies_soft, bunnies_hard)\n", key.c_str());
+      return kExitUsage;
+    }
   try {
     std::vector<ffdbench::Scenario> chosen;
-    for (const ffdbench::Scenario& s : ffdbench::paper_scenarios())
+    for (const ffdbench::Scenario& s : all)
       if (o.only.empty() || std::find(o.only.begin(), o.only.end(), s.key) != o.only.end()) chosen.push_back(s);
-    for (const std::string& key : o.only) {
-      const auto& all = ffdbench::paper_scenarios();
-      if (std::none_of(all.begin(), all.end(), [&](const ffdbench::Scenario& s) { return s.key == key; }))
-        throw std::invalid_argument("--only: unknown scenario '" + key +
-                                    "' (teapots, alphabets, happy_buddha, bunnies_soft, bunnies_hard)");
-    }
     std::string readme_text;
     if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of benchmarking
       readme_text = read_file(o.readme);
@@ -98,7 +99,7 @@ int run_bench(const BenchOptions& o) {
       std::fprintf(stderr, "ffdsim bench: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim bench: wrote %s/table.md and %s/bench.json\n", o.out_dir.c_str(), o.out_dir.c_str());
-    if (!finite) return kExitNonFinite;
+    if (!finite) return kExitRuntime;
     return missing ? kExitAssertionFailed : kExitOk;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());

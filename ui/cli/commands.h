@@ -8,12 +8,14 @@
 
 namespace ffdsim {
 
-// Exit codes shared by the subcommands.
+// Exit codes shared by the subcommands (the README's table; tests/ui/exit_codes_test.cpp holds
+// every command to it).
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitUsage = 1;            // command line rejected (CLI11)
-inline constexpr int kExitBadInput = 2;         // a scene, script, mesh or output path is wrong
-inline constexpr int kExitNonFinite = 3;        // the simulation produced NaN or infinity
-inline constexpr int kExitAssertionFailed = 4;  // a replay assertion failed
+inline constexpr int kExitUsage = 1;            // the command line: unknown command or option, a value out of range
+inline constexpr int kExitBadInput = 2;         // a file given: a scene, script, mesh or recording is missing or
+                                                // wrong, or an output cannot be written
+inline constexpr int kExitRuntime = 3;          // the run failed: non-finite values, no window, a silent device
+inline constexpr int kExitAssertionFailed = 4;  // a check failed: a replay assertion, a UI script cut short
 
 // Create a folder, or the folder a file will be written into; throw naming it on failure.
 // Called before a run, so that a bad output path fails before the run rather than after it.

@@ -176,7 +176,7 @@ int run_device_sim(const DeviceSimOptions& o) {
       ::close(fd);
       std::fprintf(stderr, "ffdsim: error: %s: no force came back within %.0f ms (is `ffdsim run --device %s` running?)\n",
                    o.url.c_str(), o.wait_ms, o.url.c_str());
-      return kExitBadInput;
+      return kExitRuntime;
     }
     received.clear();
   }
@@ -310,7 +310,7 @@ int run_device_sim(const DeviceSimOptions& o) {
                 received.size(), max_force, rtt.p50_us, rtt.p99_us, rtt.max_us);
   if (received.empty()) {
     std::fprintf(stderr, "ffdsim: error: %s: no force came back while the path played\n", o.url.c_str());
-    return kExitBadInput;
+    return kExitRuntime;
   }
   return kExitOk;
 }

@@ -2,8 +2,10 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 
 #include "commands.h"
+#include "ffd/toml_reader.h"
 #include "ffd/worker_pool.h"
 
 namespace ffdsim {
@@ -21,13 +23,26 @@ void ensure_folder(const std::string& dir) {
   if (dir.empty()) return;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
+  if (ec) throw ffd::InputError(dir + ": cannot create folder: " + ec.message());
 }
 
 void ensure_parent_folder(const std::string& file_path) {
   ensure_folder(std::filesystem::path(file_path).parent_path().string());
 }
 }  // namespace ffdsim
+
+namespace {
+std::string command_list(const CLI::App& app) {
+  std::string names;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))
+    names += (names.empty() ? "" : ", ") + command->get_name();
+  return names;
+}
+
+bool has_command(const CLI::App& app, const std::string& name) {
+  return !app.get_subcommands([&name](const CLI::App* command) { return command->get_name() == name; }).empty();
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -46,10 +61,27 @@ int main(int argc, char** argv) {
   ffdsim::register_accuracy(app, accuracy);
   ffdsim::DeviceSimOptions device_sim;
   ffdsim::register_device_sim(app, device_sim);
+  // A first word that is no option must name a command: say which word, not only that a
+  // command is missing.
+  if (argc < 2) {
+    std::fprintf(stderr, "ffdsim: error: a command is required (%s); `ffdsim --help` lists them\n", command_list(app).c_str());
+    return ffdsim::kExitUsage;
+  }
+  const std::string first = argv[1];
+  if (first[0] == '-' && first != "-h" && first != "--help") {
+    std::fprintf(stderr, "ffdsim: error: unknown option '%s'; a command comes first (%s)\n", argv[1],
+                 command_list(app).c_str());
+    return ffdsim::kExitUsage;
+  }
+  if (first[0] != '-' && !has_command(app, first)) {
+    std::fprintf(stderr, "ffdsim: error: unknown command '%s' (commands: %s)\n", argv[1], command_list(app).c_str());
+    return ffdsim::kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the reason; its own codes (105, 106, ...) all mean "usage" to a user.
+    return app.exit(e) == 0 ? ffdsim::kExitOk : ffdsim::kExitUsage;
   }
   if (app.got_subcommand("simulate")) return ffdsim::run_simulate(simulate);
   if (app.got_subcommand("replay")) return ffdsim::run_replay_command(replay);

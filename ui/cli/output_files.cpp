@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <sstream>
@@ -10,15 +12,26 @@
 
 namespace ffdsim {
 
-ProgressBar::ProgressBar(std::string command, bool quiet)
-    : command_(std::move(command)), quiet_(quiet), terminal_(isatty(STDERR_FILENO) == 1) {}
+ProgressBar::ProgressBar(std::string command, bool quiet, bool lines_off_terminal)
+    : command_(std::move(command)),
+      quiet_(quiet),
+      terminal_(isatty(STDERR_FILENO) == 1 && std::getenv("CI") == nullptr),
+      lines_off_terminal_(lines_off_terminal) {}
+
 
 void ProgressBar::operator()(const std::string& what, std::uint64_t done, std::uint64_t total) {
   if (quiet_) return;
   if (!terminal_) {
-    if (what != last_)
+    if (what != last_ && lines_off_terminal_)
       std::fprintf(stderr, "%s: %s (%llu steps)\n", command_.c_str(), what.c_str(), static_cast<unsigned long long>(total));
     last_ = what;
+    return;
+  }
+  const Clock::time_point now = Clock::now();
+  if (what != last_ || !drawn_) {
+    phase_start_ = now;
+    phase_start_done_ = done;
+  } else if (done < total && now - last_draw_ < std::chrono::milliseconds(100)) {
     return;
   }
   constexpr int kWidth = 30;
@@ -26,15 +39,33 @@ void ProgressBar::operator()(const std::string& what, std::uint64_t done, std::u
   const int filled = static_cast<int>(fraction * kWidth);
   std::string bar(static_cast<std::size_t>(filled), '#');
   bar.resize(kWidth, '.');
-  std::fprintf(stderr, "\r\033[K%-28s [%s] %3d%%  %llu/%llu", what.c_str(), bar.c_str(), static_cast<int>(fraction * 100.0),
-               static_cast<unsigned long long>(done), static_cast<unsigned long long>(total));
+  std::string pace;  // once there is something to go on
+  const double seconds = std::chrono::duration<double>(now - phase_start_).count();
+  if (done > phase_start_done_ && seconds > 0.0) {
+    const double rate = static_cast<double>(done - phase_start_done_) / seconds;
+    char text[64];
+    std::snprintf(text, sizeof text, "  %.0f steps/s", rate);
+    pace = text;
+    if (done < total) pace += ", " + duration_text(static_cast<double>(total - done) / rate) + " left";
+  }
+  std::fprintf(stderr, "\r\033[K%-28s [%s] %3d%%  %llu/%llu%s", what.c_str(), bar.c_str(), static_cast<int>(fraction * 100.0),
+               static_cast<unsigned long long>(done), static_cast<unsigned long long>(total), pace.c_str());
   std::fflush(stderr);
   last_ = what;
+  last_draw_ = now;
+  drawn_ = true;
 }
 
 void ProgressBar::finish_line(const std::string& text) {
   if (quiet_) return;
   std::fprintf(stderr, terminal_ ? "\r\033[K%s\n" : "%s\n", text.c_str());
+}
+
+void ProgressBar::clear() {
+  if (quiet_ || !terminal_ || !drawn_) return;
+  std::fprintf(stderr, "\r\033[K");
+  std::fflush(stderr);
+  drawn_ = false;
 }
 
 void write_file(const std::filesystem::path& path, const std::string& text) {
@@ -58,6 +89,15 @@ std::string replace_section(const std::string& text, const std::string& file, co
   if (b == std::string::npos || e == std::string::npos || e < b)
     throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
   return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
+}
+
+std::string duration_text(double seconds) {
+  char text[32];
+  if (seconds < 10.0) std::snprintf(text, sizeof text, "%.1f s", seconds);
+  else if (seconds < 60.0) std::snprintf(text, sizeof text, "%.0f s", seconds);
+  else if (seconds < 3600.0) std::snprintf(text, sizeof text, "%.0f min %02.0f s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
+  else std::snprintf(text, sizeof text, "%.0f h %02.0f min", std::floor(seconds / 3600.0), std::fmod(seconds / 60.0, 60.0));
+  return text;
 }
 
 std::string today() {

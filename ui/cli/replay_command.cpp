@@ -64,7 +64,12 @@ int run_replay_command(const ReplayOptions& o) {
       return kExitBadInput;
     }
   }
-  return result.passed() ? 0 : kExitAssertionFailed;
+  if (!result.finite) {  // the run failed, whatever the assertions say
+    std::fprintf(stderr, "ffdsim: error: %s: the simulation produced a non-finite value at step %llu\n", o.script.c_str(),
+                 static_cast<unsigned long long>(result.first_non_finite_step.value_or(result.steps)));
+    return kExitRuntime;
+  }
+  return result.passed() ? kExitOk : kExitAssertionFailed;
 }
 
 }  // namespace ffdsim

@@ -135,7 +135,7 @@ int report(const RunOptions& o, const RunFigures& f) {
   const std::size_t steps = f.compute_ns.size();
   const ffd::TimeSummary compute = ffd::summarize_times(f.compute_ns);
   const ffd::TimeSummary lateness = ffd::summarize_times(f.lateness_ns);
-  int status = f.finite ? kExitOk : kExitNonFinite;
+  int status = f.finite ? kExitOk : kExitRuntime;
   const bool interrupted = g_interrupted.load();
   if (!o.quiet) {
     std::printf("%s (%s): %zu steps in real time at %.0f Hz, budget %.0f us%s\n", f.scene_path.c_str(), f.mode.c_str(),
@@ -402,7 +402,7 @@ int run_run(const RunOptions& given) {
         if (o.report_path.empty()) o.report_path = "out/report.json";
         ensure_folder(u.frames_dir);
         ensure_parent_folder(o.report_path);
-        if (!u.script) {
+        if (!u.script && o.seconds == 0.0) {  // as without a display: --seconds S is S seconds of frames
           u.script = ffd::load_ui_script_file(demo_script_path());
           u.seconds = script_guard_seconds(*u.script);
         }
@@ -412,9 +412,9 @@ int run_run(const RunOptions& given) {
     } catch (const ffd::InputError& e) {
       std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
       return kExitBadInput;
-    } catch (const std::exception& e) {
+    } catch (const std::exception& e) {  // no window, no OpenGL context
       std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-      return kExitBadInput;
+      return kExitRuntime;
     }
     figures.scene_path = r.scene_path;
     figures.device = device.get();

@@ -1,4 +1,6 @@
 // `ffdsim simulate`: runs a scene headless as fast as it can and reports.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +14,7 @@
 #include "ffd/step.h"
 #include "ffd/worker_pool.h"
 #include "json_report.h"
+#include "output_files.h"
 
 namespace ffdsim {
 
@@ -62,12 +65,38 @@ void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::St
         std::printf("objects asleep: %.1f on average, at most %u of %zu\n", c.mean, c.max, model.objects.size());
 }
 
+// Resident memory of this process (bytes), from /proc/self/statm; 0 where unreadable.
+double resident_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  double pages_total = 0.0, pages_resident = 0.0;
+  if (!(statm >> pages_total >> pages_resident)) return 0.0;
+  return pages_resident * static_cast<double>(sysconf(_SC_PAGESIZE));
+}
+
+// Before the first step of a large scene: what it holds in memory, about how long its steps
+// will take, and what makes it smaller. The step time is a rough cost model (ns per spring or
+// shape-matching member and per FFD AABB, measured on filled boxes of 10 k to 550 k nodes,
+// Intel Xeon, 2 threads); the progress bar gives the real rate once steps run.
+void estimate_large_scene(const ffd::Model& model, long long steps) {
+  constexpr double kSecondsPerSpring = 35e-9, kSecondsPerBox = 200e-9;
+  const double work = static_cast<double>(model.springs.size() + model.region_members.size() + 4 * model.tetrahedra.size());
+  const double step_s = kSecondsPerSpring * work + kSecondsPerBox * static_cast<double>(model.box_count());
+  const double memory = resident_bytes();
+  if (step_s < 0.01 && memory < 512e6) return;  // small: a few seconds for 3000 steps
+  const double total_s = step_s * static_cast<double>(steps);
+  std::fprintf(stderr,
+               "ffdsim: a large scene: %zu lattice nodes, %zu cells; %.2f GB in memory now; a step takes about %.3g s, "
+               "%lld steps about %s\n"
+               "ffdsim: a larger cell_size in each [[object]] makes it smaller (twice the size: about 8 times fewer "
+               "cells, nodes and springs), as does --steps\n",
+               model.node_count(), model.cell_count(), memory / 1e9, step_s, steps, duration_text(total_s).c_str());
+}
+
 }  // namespace
 
 void register_simulate(CLI::App& app, SimulateOptions& o) {
   CLI::App* cmd = app.add_subcommand("simulate", "Run a scene headless as fast as possible and report");
-  cmd->add_option("scene", o.scene, "Scene file (TOML); default: two teapots dropped on a floor")
-      ->check(CLI::ExistingFile);
+  cmd->add_option("scene", o.scene, "Scene file (TOML); default: two teapots dropped on a floor");
   cmd->add_option("--steps", o.steps, "Number of fixed steps to run")->check(CLI::Range(1LL, 1000000000LL));
   cmd->add_option("--report", o.report_path, "Write the JSON run report to this file");
   CLI::Option* every = cmd->add_option("--obj-every", o.obj_every, "Write the deformed surfaces every K steps")
@@ -96,6 +125,10 @@ int run_simulate(const SimulateOptions& o) {
     ffd::StepStatistics stats;
     stats.reserve(static_cast<std::size_t>(o.steps));
     ffd::StepReport report;
+    if (!o.quiet) estimate_large_scene(model, o.steps);
+    // On a terminal only: a log or CI gets the summary alone.
+    ProgressBar progress("ffdsim simulate", o.quiet, /*lines_off_terminal=*/false);
+    const std::uint64_t total = static_cast<std::uint64_t>(o.steps);
     if (o.obj_every > 0) write_surfaces(o.out_dir, spec, model, state);
     for (long long i = 0; i < o.steps; ++i) {
       ffd::step(model, state, scratch, report);
@@ -103,7 +136,9 @@ int run_simulate(const SimulateOptions& o) {
       ffd::grow_scratch(model, scratch, report);
       if (o.obj_every > 0 && state.step % static_cast<std::uint64_t>(o.obj_every) == 0)
         write_surfaces(o.out_dir, spec, model, state);
+      progress(spec.name, static_cast<std::uint64_t>(i + 1), total);
     }
+    progress.clear();
     RunSummary run;
     run.scene = spec.name;
     run.steps = state.step;

@@ -13,6 +13,22 @@
 
 namespace ffd::ui {
 
+namespace {
+// A run owns the frames it writes: frame_NNNNN.png and frames.json. Those of an earlier run
+// in the same folder go first, so that the folder and its index always agree; other files
+// are left alone.
+void remove_earlier_frames(const std::filesystem::path& dir) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::size_t digits_end = name.find_first_not_of("0123456789", 6);
+    const bool frame = name.rfind("frame_", 0) == 0 && digits_end != std::string::npos && digits_end >= 11 &&
+                       name.substr(digits_end) == ".png";
+    if (frame || name == "frames.json") std::filesystem::remove(entry.path(), ec);
+  }
+}
+}  // namespace
+
 UiRunResult run_headless(const UiRunOptions& options) {
   using Clock = std::chrono::steady_clock;
   if (!options.script && options.seconds <= 0.0) throw std::invalid_argument("run_headless: a script or a time limit is needed");
@@ -26,6 +42,7 @@ UiRunResult run_headless(const UiRunOptions& options) {
   std::optional<ScriptedInput> script;
   if (options.script) script.emplace(*options.script);
   const double dt = viewer.session().model().settings.dt;
+  if (!options.frames_dir.empty()) remove_earlier_frames(options.frames_dir);
   const std::uint64_t capture_every =
       std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(1.0 / (options.fps * dt))));
   std::uint64_t next_capture = 0;

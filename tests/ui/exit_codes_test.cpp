@@ -1,0 +1,93 @@
+// Every command against the README's table of exit codes: 0 success, 1 usage (the command
+// line), 2 input (a file given), 3 runtime (the run failed), 4 a check failed.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "support/run_ffdsim.h"
+
+namespace {
+
+const std::string kData = std::string(FFDSIM_TEST_DATA_DIR) + "/scenes/";
+const std::string kMinimal = kData + "minimal.toml";
+const std::string kDiverging = kData + "diverging.toml";
+
+// The command line, its exit code and a piece of what it must say.
+void check_exit(const std::string& arguments, int expected, const std::string& says, const std::string& prefix = "") {
+  const test::ProgramResult r = test::run_ffdsim(arguments, prefix);
+  INFO("ffdsim " << arguments << "\n" << r.output);
+  CHECK(r.exit_code == expected);
+  CHECK_THAT(r.output, Catch::Contains(says));
+}
+
+}  // namespace
+
+TEST_CASE("Exit codes: the program without a known command is a usage error; --help succeeds", "[cli]") {
+  check_exit("", 1, "a command is required (simulate, replay, run, bench, accuracy, device-sim)");
+  check_exit("frobnicate", 1, "unknown command 'frobnicate'");
+  check_exit("--frobnicate", 1, "unknown option '--frobnicate'");
+  check_exit("--help", 0, "simulate");
+  for (const char* command : {"simulate", "replay", "run", "bench", "accuracy", "device-sim"})
+    check_exit(std::string(command) + " --help", 0, "Usage");
+}
+
+TEST_CASE("Exit codes: simulate", "[cli]") {
+  check_exit("simulate " + kMinimal + " --steps 5 -q", 0, "");
+  check_exit("simulate --steps 0", 1, "--steps: Value 0 not in range");
+  check_exit("simulate " + kMinimal + " extra.toml", 1, "extra.toml");
+  check_exit("simulate --obj-every 5", 1, "--obj-every requires --out");
+  check_exit("simulate missing.toml", 2, "missing.toml: cannot open scene file");
+  check_exit("simulate " + kData + "bad_range.toml", 2, "bad_range.toml:");
+  check_exit("simulate " + kDiverging + " --steps 5 -q", 3, "");
+}
+
+TEST_CASE("Exit codes: run", "[cli]") {
+  check_exit("run --headless --seconds 0.2 -q " + kMinimal, 0, "");
+  check_exit("run --seconds 0", 1, "--seconds: Value 0 not in range");
+  check_exit("run --window --headless", 1, "--headless excludes --window");
+  check_exit("run --headless " + kMinimal + " extra.toml", 1, "extra.toml");
+  check_exit("run --headless --device tcp://x " + kMinimal, 1, "expected udp://HOST:PORT");
+  check_exit("run --headless --seconds 0.2 missing.toml", 2, "missing.toml: cannot open scene file");
+  check_exit("run --headless --seconds 0.2 --input missing_script.toml " + kMinimal, 2, "missing_script.toml");
+  check_exit("run --window --seconds 0.2 " + kMinimal, 3, "no display", "env -u DISPLAY -u WAYLAND_DISPLAY ");
+  check_exit("run --headless --seconds 0.2 " + kDiverging, 3, "");
+}
+
+TEST_CASE("Exit codes: replay", "[cli]") {
+  const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_replay");
+  std::filesystem::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& scene, const std::string& body) {
+    const std::string path = (dir / name).string();
+    std::ofstream(path) << "version = 1\nscene = \"" << scene << "\"\nsteps = 20\n" << body;
+    return path;
+  };
+  check_exit("replay --fast " + write("ok.toml", kMinimal, "[assert.stability]\nfinite = true\n"), 0, "PASS");
+  check_exit("replay --fast --realtime " + write("ok2.toml", kMinimal, ""), 1, "excludes");
+  check_exit("replay", 1, "script is required");
+  check_exit("replay --fast missing_replay.toml", 2, "missing_replay.toml: cannot open replay script");
+  check_exit("replay --fast " + write("diverging.toml", kDiverging, ""), 3, "non-finite value at step");
+  check_exit("replay --fast " + write("fail.toml", kData + "probe_and_grab.toml", "[assert.stability]\nspeed_max_m_s = 1e-9\n"), 4,
+             "FAIL stability.speed_max_m_s");
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Exit codes: bench and accuracy", "[cli]") {
+  check_exit("bench --only nope", 1, "--only: unknown scenario 'nope'");
+  check_exit("bench --repetitions 0", 1, "--repetitions");
+  check_exit("bench --only happy_buddha --update-readme missing_readme.md", 2, "missing_readme.md");
+  check_exit("accuracy --levels 9", 1, "--levels: Value 9 not in range");
+  check_exit("accuracy missing.toml", 2, "missing.toml: cannot open scene file");
+  const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_accuracy");
+  check_exit("accuracy -q --steps 20 --levels 2 --responses paper --out " + dir.string() + " " + kDiverging, 3, "");
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Exit codes: device-sim", "[cli][device]") {
+  const std::string script = std::string(FFDSIM_SCENARIO_DIR) + "/replays/device_press.toml";
+  check_exit("device-sim " + script + " --to udp://127.0.0.1", 1, "expected udp://HOST:PORT");
+  check_exit("device-sim " + script + " --to udp://127.0.0.1:9 --drop 2", 1, "--drop");
+  check_exit("device-sim missing_path.toml --to udp://127.0.0.1:9", 2, "missing_path.toml");
+  // Nobody listens on the discard port: no force comes back.
+  check_exit("device-sim " + script + " --to udp://127.0.0.1:9 --wait-ms 50", 3, "no force came back within 50 ms");
+}
