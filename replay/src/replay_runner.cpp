@@ -126,9 +126,12 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   options.stop_at_step = script.steps;
   options.hash_every = static_cast<std::uint32_t>(hash_interval(script));
   // Every step when the energy gain is asserted: impact peaks last a step or two.
-  options.energy_every = script.stability.energy_gain_max_j ? 1 : 10;
+  RunExports* exports = run_options.exports;
+  const bool series = exports && !exports->options().series_path.empty();
+  options.energy_every = script.stability.energy_gain_max_j || series ? 1 : 10;
   options.frame_every = 0;  // nobody looks
-  options.snapshot_every = static_cast<std::uint32_t>(gcd_of_sample_steps(script));
+  options.snapshot_every = static_cast<std::uint32_t>(
+      std::gcd(gcd_of_sample_steps(script), exports ? exports->surfaces_every() : std::uint64_t{0}));
   // Commands for the whole run wait in the loop's queue from the start.
   options.command_capacity = std::max<std::size_t>(1 << 12, script.commands.size() + 16);
   PhysicsLoop loop(model, initial_state(model), options);
@@ -236,11 +239,13 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       if (t.has_hash) {
         result.hashes.emplace_back(t.step, t.state_hash);
       }
+      if (exports) exports->telemetry(t);
     }
     while (Snapshot* s = loop.pop_snapshot()) {
       std::copy(s->x.begin(), s->x.end(), surface_state.x.begin());
       const std::uint64_t step = s->step;
       loop.recycle(s);
+      if (exports) exports->snapshot(step, surface_state.x);
       if (!script.positions.empty() || script.rest.speed_max_m_s || !script.creeps.empty())
         centres_of_mass(model, surface_state.x, centres);
       for (std::size_t i = 0; i < script.creeps.size(); ++i) {

@@ -95,6 +95,8 @@ class ScriptReader {
     } catch (const CompileError& e) {
       root.fail_at("scene", std::string("the scene does not compile: ") + e.what());
     }
+    for (const std::string& line : log)  // e.g. objects that start inside each other
+      if (line.rfind("warning: ", 0) == 0) script.warnings.push_back(script.scene_origin + ": " + line.substr(9));
     model_ = &out.model;
     dt_ms_ = out.model.settings.dt * 1000.0;
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "ffd/measure.h"
 #include "ffd/model.h"
 #include "ffd/box_test.h"
 #include "lattice.h"
@@ -192,6 +193,31 @@ Mat3 rotation_from_degrees(const Vec3& deg) {
       .toRotationMatrix();
 }
 
+}  // namespace
+
+namespace {
+// Objects that start inside each other (or below a plane) are simulated as they are, already
+// crossed: say so, with the pair and the depth on the exact surfaces. A [[group]] whose
+// spacing is smaller than its objects does this easily.
+void warn_about_start_overlaps(const Model& model, std::vector<std::string>& log) {
+  constexpr double kReportedDepth = 1e-6;  // m; below this, touching rather than overlapping
+  const SurfaceContactReport start = measure_surface_contacts(model, initial_state(model));
+  for (const SurfaceContact& c : start.contacts) {
+    if (!(c.penetration_m > kReportedDepth)) continue;
+    const bool plane = std::none_of(model.objects.begin(), model.objects.end(),
+                                    [&](const ObjectModel& o) { return o.name == c.b; });
+    std::ostringstream line;
+    line.precision(3);
+    if (plane)
+      line << "warning: object '" << c.a << "' starts " << c.penetration_m * 1e3 << " mm below the plane '" << c.b
+           << "' (" << c.penetrating_vertices << " surface vertices below it)";
+    else
+      line << "warning: objects '" << c.a << "' and '" << c.b << "' overlap at the start by " << c.penetration_m * 1e3
+           << " mm (" << c.penetrating_vertices << " surface vertices inside the other); they are simulated as they "
+           << "are, already crossed: move them apart (a [[group]]'s spacing smaller than its objects does this)";
+    log.push_back(line.str());
+  }
+}
 }  // namespace
 
 Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
@@ -454,6 +480,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
   model.sleep_steps = static_cast<std::uint32_t>(
       std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
+  warn_about_start_overlaps(model, log);
   return model;
 }
 

@@ -1,6 +1,7 @@
 #include "ffd/measure.h"
 
 #include <algorithm>
+#include <optional>
 
 #include "ffd/surface_metrics.h"
 #include "ffd/trilinear.h"
@@ -62,12 +63,18 @@ SurfaceContactReport measure_surface_contacts(const Model& model, const State& s
     report.contacts.push_back(std::move(c));
   };
   const bool objects_collide = has(model.settings.effects, Effect::InterCollision);
+  // Each surface's distance helper is built the first time a pair needs it, then shared.
+  std::vector<std::optional<SurfaceDistance>> distance(surfaces.size());
+  auto distance_to = [&](std::size_t i) -> const SurfaceDistance& {
+    if (!distance[i]) distance[i].emplace(surfaces[i], search_radius);
+    return *distance[i];
+  };
   for (std::size_t i = 0; objects_collide && i < surfaces.size(); ++i) {
     for (std::size_t j = i + 1; j < surfaces.size(); ++j) {
       const Vec3 lo = bounds[i].first.cwiseMax(bounds[j].first) - Vec3::Constant(search_radius);
       const Vec3 hi = bounds[i].second.cwiseMin(bounds[j].second) + Vec3::Constant(search_radius);
       if ((lo.array() > hi.array()).any()) continue;
-      const PairContactMetrics m = measure_pair(surfaces[i], surfaces[j], search_radius);
+      const PairContactMetrics m = measure_pair(surfaces[i], distance_to(i), surfaces[j], distance_to(j), search_radius);
       if (!m.near) continue;
       add({model.objects[i].name, model.objects[j].name, m.penetration_m, m.gap_m, m.penetrating_vertices});
     }

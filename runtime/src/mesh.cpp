@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -139,6 +140,11 @@ std::string MeshCleanReport::summary() const {
   if (stray_components > 0)
     parts.push_back("dropped " + plural(stray_components, "stray component", "stray components") + " (" +
                     plural(stray_component_triangles, "triangle", "triangles") + ")");
+  if (turned_outward) {
+    char volume[64];
+    std::snprintf(volume, sizeof volume, "%.3g", inside_out_volume_m3);
+    parts.push_back(std::string("wound inside out (enclosed volume ") + volume + " m^3): turned outward");
+  }
   if (parts.empty()) return "clean";
   std::string line = parts[0];
   for (std::size_t i = 1; i < parts.size(); ++i) line += "; " + parts[i];
@@ -156,7 +162,7 @@ SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options
     throw std::invalid_argument("clean_mesh: min_component_fraction must be in [0, 1]");
   for (std::size_t i = 0; i < input.vertices.size(); ++i) {
     if (!is_finite(input.vertices[i]))
-      throw std::invalid_argument("clean_mesh: vertex " + std::to_string(i) + " is not finite");
+      throw std::invalid_argument("clean_mesh: vertex " + std::to_string(i + 1) + " (counting from 1) is not finite");
   }
   for (std::size_t t = 0; t < input.triangles.size(); ++t) {
     for (Index v : input.triangles[t]) {
@@ -290,7 +296,53 @@ SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options
   report.output_triangles = output.triangles.size();
   if (output.triangles.empty())
     throw std::invalid_argument("clean_mesh: no triangles remain (" + report.summary() + ")");
+
+  // 6. Orientation: a closed, consistently wound surface that encloses a negative volume is
+  // wound inside out (its normals point in); the response pushes along those normals, so it
+  // is turned outward, and the report says so.
+  if (is_closed_and_consistent(output)) {
+    const double volume = enclosed_volume(output);
+    if (volume < 0.0) {
+      for (auto& t : output.triangles) std::swap(t[1], t[2]);
+      report.turned_outward = true;
+      report.inside_out_volume_m3 = volume;
+    }
+  }
   return output;
+}
+
+double enclosed_volume(const SurfaceMesh& mesh) {
+  // In coordinates centred on the bounds and scaled to [-1, 1] (halves first: no overflow for
+  // any finite input), then scaled back; the sign holds even where the m^3 would not fit.
+  if (mesh.vertices.empty()) return 0.0;
+  const auto [lo, hi] = mesh_bounds(mesh);
+  const Vec3 half_centre = 0.5 * (0.5 * lo + 0.5 * hi);
+  const double half_extent = (0.5 * hi - 0.5 * lo).maxCoeff();
+  if (!(half_extent > 0.0)) return 0.0;
+  const auto unit = [&](Index v) -> Vec3 { return (0.5 * mesh.vertices[v] - half_centre) / half_extent; };
+  double six_volume = 0.0;  // divergence theorem: each triangle's tetrahedron with the centre
+  for (const auto& t : mesh.triangles) six_volume += unit(t[0]).dot(unit(t[1]).cross(unit(t[2])));
+  const double scale = 2.0 * half_extent;
+  if (scale > 1e100 || scale < 1e-100) return six_volume < 0.0 ? -1.0 : six_volume > 0.0 ? 1.0 : 0.0;
+  return six_volume / 6.0 * scale * scale * scale;
+}
+
+bool is_closed_and_consistent(const SurfaceMesh& mesh) {
+  // Every directed edge once, and its reverse once: each edge has two triangles that wind it
+  // in opposite directions. Then the sorted edges and the sorted reversed edges are equal.
+  std::vector<std::uint64_t> edges, reversed;
+  edges.reserve(3 * mesh.triangles.size());
+  reversed.reserve(3 * mesh.triangles.size());
+  for (const auto& t : mesh.triangles)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint64_t a = t[k], b = t[(k + 1) % 3];
+      edges.push_back(a << 32 | b);
+      reversed.push_back(b << 32 | a);
+    }
+  std::sort(edges.begin(), edges.end());
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return false;  // a directed edge twice
+  std::sort(reversed.begin(), reversed.end());
+  return edges == reversed;
 }
 
 SurfaceMesh make_box_mesh(const Vec3& size) {

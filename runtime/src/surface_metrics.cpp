@@ -276,8 +276,11 @@ SurfaceDistance::Query SurfaceDistance::query(const Vec3& point) const {
 }
 
 PairContactMetrics measure_pair(const SurfaceMesh& a, const SurfaceMesh& b, double search_radius) {
-  const SurfaceDistance distance_to_a(a, search_radius);
-  const SurfaceDistance distance_to_b(b, search_radius);
+  return measure_pair(a, SurfaceDistance(a, search_radius), b, SurfaceDistance(b, search_radius), search_radius);
+}
+
+PairContactMetrics measure_pair(const SurfaceMesh& a, const SurfaceDistance& distance_to_a, const SurfaceMesh& b,
+                                const SurfaceDistance& distance_to_b, double search_radius) {
   PairContactMetrics metrics;
   double closest_outside = search_radius;  // m
   auto visit = [&](const SurfaceMesh& from, const SurfaceDistance& to) {

@@ -91,6 +91,9 @@ SurfaceMesh read_obj_indexing(const std::string& path) {
         const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), position[axis]);
         if (error != std::errc() || end != number.data() + number.size())
           fail(path, where + "cannot read the vertex coordinate '" + std::string(number) + "'");
+        if (!std::isfinite(position[axis]))
+          fail(path, where + "vertex " + std::to_string(mesh.vertices.size() + 1) + " has the coordinate '" +
+                         std::string(number) + "', which is not a finite number");
       }
       mesh.vertices.push_back(position);
     } else if (!tokens.empty() && tokens[0] == "f") {
@@ -327,8 +330,12 @@ SurfaceMesh read_ply(const std::string& path, std::uintmax_t file_bytes) {
       for (const PlyProperty& property : element.properties) {
         if (!property.list_count) {
           const double value = body.next(*property.type);
-          if (is_vertex && property.name.size() == 1 && property.name[0] >= 'x' && property.name[0] <= 'z')
+          if (is_vertex && property.name.size() == 1 && property.name[0] >= 'x' && property.name[0] <= 'z') {
+            if (!std::isfinite(value))
+              fail(path, body.where() + "vertex " + std::to_string(entry + 1) + " has a " + property.name +
+                             " that is not a finite number");
             position[property.name[0] - 'x'] = value;
+          }
           continue;
         }
         const bool is_corners = is_face && (property.name == "vertex_indices" || property.name == "vertex_index");
@@ -417,6 +424,9 @@ SurfaceMesh read_off(const std::string& path, std::uintmax_t file_bytes) {
       const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), position[axis]);
       if (error != std::errc() || end != number.data() + number.size())
         fail(path, where() + "cannot read the vertex coordinate '" + std::string(number) + "'");
+      if (!std::isfinite(position[axis]))
+        fail(path, where() + "vertex " + std::to_string(v + 1) + " has the coordinate '" + std::string(number) +
+                       "', which is not a finite number");
     }
     mesh.vertices.push_back(position);
   }
@@ -539,6 +549,9 @@ SurfaceMesh import_mesh(const std::string& path) {
     for (unsigned v = 0; v < part.mNumVertices; ++v) {
       const aiVector3D& p = part.mVertices[v];
       mesh.vertices.emplace_back(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
+      // A format without lines (binary STL): the vertex as the file counts them, from 1.
+      if (!is_finite(mesh.vertices.back()) && extension != ".obj")
+        fail(path, "vertex " + std::to_string(mesh.vertices.size()) + " (counting from 1) is not finite");
     }
     for (unsigned f = 0; f < part.mNumFaces; ++f) {
       const aiFace& face = part.mFaces[f];

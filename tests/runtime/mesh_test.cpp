@@ -257,7 +257,7 @@ TEST_CASE("clean_mesh rejects bad input", "[mesh]") {
     SurfaceMesh mesh = tetrahedron();
     mesh.vertices[2].y() = std::numeric_limits<double>::infinity();
     CHECK_THROWS_AS(ffd::clean_mesh(mesh, {}, report), std::invalid_argument);
-    CHECK_THROWS_WITH(ffd::clean_mesh(mesh, {}, report), Catch::Matchers::Contains("vertex 2 is not finite"));
+    CHECK_THROWS_WITH(ffd::clean_mesh(mesh, {}, report), Catch::Matchers::Contains("vertex 3 (counting from 1) is not finite"));
   }
   SECTION("nothing left") {
     SurfaceMesh mesh;

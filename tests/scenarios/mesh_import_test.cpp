@@ -433,3 +433,42 @@ TEST_CASE("import_mesh rejects files and headers over its limits before reading 
     check_import_error(path, "the file has 1073741825 bytes, more than the limit of 1073741824 (1 GiB)");
   }
 }
+
+TEST_CASE("import_mesh names the file and the 1-based line of a vertex that is not finite", "[mesh_import]") {
+  TempDir dir;
+  const std::string tetrahedron_faces = "f 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n";
+  check_import_error(dir.write("nan.obj", "# a comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 1\n" + tetrahedron_faces),
+                     "line 5: vertex 4 has the coordinate 'nan', which is not a finite number");
+  check_import_error(dir.write("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nv 0 0 1\n" + tetrahedron_faces),
+                     "line 3: vertex 3 has the coordinate 'inf', which is not a finite number");
+  check_import_error(dir.write("nan.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\nnan 0 1\n3 0 1 2\n3 0 2 3\n3 0 3 1\n3 1 3 2\n"),
+                     "line 6: vertex 4 has the coordinate 'nan', which is not a finite number");
+  check_import_error(dir.write("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                          "end_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
+                     "line 11: vertex 2 has a y that is not a finite number");
+}
+
+TEST_CASE("a closed mesh wound inside out is turned outward, with a note, and simulates as the outward one",
+          "[mesh_import]") {
+  SurfaceMesh box = ffd::make_box_mesh(Vec3(0.1, 0.2, 0.3));
+  SurfaceMesh inside_out = box;
+  for (Triangle& t : inside_out.triangles) std::swap(t[1], t[2]);
+  CHECK(ffd::enclosed_volume(box) == Approx(0.006));
+  CHECK(ffd::enclosed_volume(inside_out) == Approx(-0.006));
+  ffd::MeshCleanReport report;
+  const SurfaceMesh turned = ffd::clean_mesh(inside_out, {}, report);
+  CHECK(report.turned_outward);
+  CHECK(report.inside_out_volume_m3 == Approx(-0.006));
+  CHECK(report.summary() == "wound inside out (enclosed volume -0.006 m^3): turned outward");
+  CHECK(turned.triangles == box.triangles);
+  // An outward box and an open surface (one face missing) are left as they are.
+  ffd::clean_mesh(box, {}, report);
+  CHECK_FALSE(report.turned_outward);
+  SurfaceMesh open = inside_out;
+  open.triangles.pop_back();
+  open.triangles.pop_back();
+  CHECK_FALSE(ffd::is_closed_and_consistent(open));
+  CHECK(ffd::clean_mesh(open, {}, report).triangles == open.triangles);
+  CHECK_FALSE(report.turned_outward);
+}

@@ -170,3 +170,73 @@ TEST_CASE("simulate estimates memory and step time of a large scene before its f
   CHECK(r.output.find("a large scene") == std::string::npos);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("a mesh wound inside out is turned outward with a note in the log, and simulates as the outward one", "[cli]") {
+  const std::filesystem::path dir = temp_dir("inside_out");
+  std::filesystem::create_directories(dir);
+  // A 10 cm cube, 8 vertices, 12 triangles, outward and inside out.
+  const std::string vertices = "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0.1 0.1 0\nv 0 0 0.1\nv 0.1 0 0.1\nv 0 0.1 0.1\nv 0.1 0.1 0.1\n";
+  const std::string outward = "f 1 3 2\nf 2 3 4\nf 5 6 7\nf 6 8 7\nf 1 2 5\nf 2 6 5\nf 3 7 4\nf 4 7 8\nf 1 5 3\nf 3 5 7\n"
+                              "f 2 4 6\nf 4 8 6\n";
+  std::string inward;
+  for (std::size_t at = 0; at < outward.size();) {  // "f a b c" -> "f a c b"
+    const std::size_t end = outward.find('\n', at);
+    const std::string line = outward.substr(at, end - at);
+    const std::size_t b = line.find(' ', 2), c = line.find(' ', b + 1);
+    inward += line.substr(0, b) + line.substr(c) + line.substr(b, c - b) + "\n";
+    at = end + 1;
+  }
+  std::ofstream(dir / "outward.obj") << vertices << outward;
+  std::ofstream(dir / "inward.obj") << vertices << inward;
+  auto scene = [&](const std::string& mesh) {
+    const std::string path = (dir / (mesh + ".toml")).string();
+    std::ofstream(path) << "[simulation]\neffects = [\"gravity\", \"planes\"]\n[[object]]\nname = \"cube\"\nmesh = \"" << mesh
+                        << ".obj\"\ncell_size = 0.025\nposition = [0.0, 0.1, 0.0]\n[object.mass_spring]\n";
+    return path;
+  };
+  const Result out = run_ffdsim("simulate " + scene("outward") + " --steps 300");
+  const Result in = run_ffdsim("simulate " + scene("inward") + " --steps 300");
+  INFO(out.output << "\n" << in.output);
+  REQUIRE(out.exit_code == 0);
+  REQUIRE(in.exit_code == 0);
+  CHECK_THAT(in.output, Catch::Contains("inward.obj): 8 vertices, 12 triangles; wound inside out (enclosed volume "
+                                        "-0.001 m^3): turned outward"));
+  CHECK(out.output.find("inside out") == std::string::npos);
+  const auto hash = [](const std::string& text) { return text.substr(text.find("state_hash"), 27); };
+  CHECK(hash(in.output) == hash(out.output));
+}
+
+TEST_CASE("objects that overlap at the start are named with the depth, by simulate, run and replay", "[cli]") {
+  const std::filesystem::path dir = temp_dir("overlap");
+  std::filesystem::create_directories(dir);
+  // Two 10 cm balls 6 cm apart overlap by 4 cm; a third sits 5 mm into the floor.
+  const std::string scene = (dir / "overlap.toml").string();
+  std::ofstream(scene) << "[simulation]\neffects = [\"gravity\", \"planes\", \"inter_collision\"]\n"
+                          "[[group]]\nname = \"ball\"\ncount = 2\nshape = \"sphere\"\nradius = 0.05\n"
+                          "layout = { grid = [2, 1, 1], spacing = [0.06, 0.0, 0.0], centre = [0.0, 0.2, 0.0] }\n"
+                          "[group.mass_spring]\n"
+                          "[[object]]\nname = \"sunk\"\nshape = \"sphere\"\nradius = 0.05\nposition = [0.5, 0.045, 0.0]\n"
+                          "[object.mass_spring]\n"
+                          "[[plane]]\nname = \"floor\"\nnormal = [0.0, 1.0, 0.0]\noffset = 0.0\n";
+  Result r = run_ffdsim("simulate " + scene + " --steps 1");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("warning: objects 'ball_0' and 'ball_1' overlap at the start by "));
+  CHECK_THAT(r.output, Catch::Contains("move them apart (a [[group]]'s spacing smaller than its objects does this)"));
+  CHECK_THAT(r.output, Catch::Contains("warning: object 'sunk' starts "));
+  CHECK_THAT(r.output, Catch::Contains(" mm below the plane 'floor'"));
+  // The depth: 4 cm on the exact surfaces, up to their sampling (the search reaches one cell).
+  const std::size_t at = r.output.find("overlap at the start by ") + 24;
+  const double depth_mm = std::stod(r.output.substr(at));
+  CHECK(depth_mm > 10.0);
+  r = run_ffdsim("run --headless --seconds 0.1 " + scene);
+  CHECK_THAT(r.output, Catch::Contains(scene + ": warning: objects 'ball_0' and 'ball_1' overlap at the start"));
+  std::ofstream(dir / "replay.toml") << "version = 1\nscene = \"overlap.toml\"\nsteps = 5\n";
+  r = run_ffdsim("replay --fast " + (dir / "replay.toml").string());
+  CHECK_THAT(r.output, Catch::Contains("ffdsim: warning: " + scene + ": objects 'ball_0' and 'ball_1' overlap"));
+  // A scene whose objects start apart says nothing of the kind.
+  r = run_ffdsim("simulate " + kScenes + "two_teapots.toml --steps 1");
+  CHECK(r.output.find("overlap at the start") == std::string::npos);
+  CHECK(r.output.find("below the plane") == std::string::npos);
+  std::filesystem::remove_all(dir);
+}

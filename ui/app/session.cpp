@@ -25,6 +25,13 @@ Session::Session(const std::string& scene_path, const SessionOptions& options)
     recording_ = std::make_unique<RecordingStream>(options_.record_path, *model_, scene_path_, spec, options_.loop.hash_every);
   }
   log_.hash_every = options_.loop.hash_every;
+  if (options_.exports.any()) {
+    std::vector<std::string> sources;
+    for (const ObjectSpec& o : spec.objects) sources.push_back(o.source);
+    exports_ = std::make_unique<RunExports>(*model_, initial_, std::move(sources), options_.exports);
+    options_.loop.snapshot_every = static_cast<std::uint32_t>(options_.exports.surfaces_every);
+    if (!options_.exports.series_path.empty()) options_.loop.energy_every = 1;  // a value in every row
+  }
   loop_ = std::make_unique<PhysicsLoop>(*model_, initial_, options_.loop);
   compute_ns_.reserve(1 << 20);
   lateness_ns_.reserve(1 << 20);
@@ -46,6 +53,7 @@ void Session::stop() {
   drain_stop_.store(true, std::memory_order_release);
   drain_thread_.join();
   drain();
+  if (exports_) exports_->finish();
   // The last step's hash, whatever the interval: a replay then compares up to the end.
   const State& last = loop_->state();
   const std::uint64_t last_hash = state_hash(last);
@@ -77,6 +85,13 @@ void Session::drain() {
   while (loop_->pop_telemetry(t)) staged_telemetry_.push_back(t);
   Command c;
   while (loop_->pop_applied_command(c)) staged_commands_.push_back(c);
+  if (exports_) {
+    for (std::size_t i = first_telemetry; i < staged_telemetry_.size(); ++i) exports_->telemetry(staged_telemetry_[i]);
+    while (Snapshot* snapshot = loop_->pop_snapshot()) {
+      exports_->snapshot(snapshot->step, snapshot->x);
+      loop_->recycle(snapshot);
+    }
+  }
   if (!recording_ || recording_closed_ || !recording_error_.empty()) return;
   try {
     for (std::size_t i = first_command; i < staged_commands_.size(); ++i) recording_->command(staged_commands_[i]);

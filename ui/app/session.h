@@ -16,6 +16,7 @@
 
 #include "ffd/physics_loop.h"
 #include "ffd/recording.h"
+#include "ffd/run_exports.h"
 
 namespace ffd::ui {
 
@@ -28,6 +29,9 @@ struct SessionOptions {
   // Record to this file as the session runs (recording.h): written from the session's drain
   // thread every 10 ms, so a killed run loses at most the last few tens of milliseconds.
   std::string record_path;
+  // Surfaces every K steps and the per-step time series (run_exports.h), written from the
+  // drain thread too.
+  ExportOptions exports;
 };
 
 // The last steps' loop figures, for the latency panel.
@@ -86,6 +90,8 @@ class Session {
   // of simulated time old; a replay runs to it or to the last command, whichever is later.
   void close_recording();
   const std::string& recording_error() const { return recording_error_; }
+  // The exports (nullptr without SessionOptions::exports); final after stop().
+  const RunExports* exports() const { return exports_.get(); }
 
  private:
   std::string scene_path_;
@@ -104,6 +110,7 @@ class Session {
   std::vector<Telemetry> staged_telemetry_, taken_telemetry_;
   std::vector<Command> staged_commands_, taken_commands_;
   std::unique_ptr<RecordingStream> recording_;
+  std::unique_ptr<RunExports> exports_;
   std::string recording_error_;
   bool recording_closed_ = false;
   std::atomic<bool> drain_stop_{false};

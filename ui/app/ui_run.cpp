@@ -17,6 +17,10 @@ void collect_result(Viewer& viewer, UiRunResult& result) {
     result.recorded_hashes = r->hashes();
     result.recording_error = session.recording_error();
   }
+  if (const RunExports* e = session.exports()) {
+    result.exports_summary = e->summary();
+    result.exports_error = e->error();
+  }
   for (const ObjectModel& o : session.model().objects) result.model_object_names.push_back(o.name);
 }
 

@@ -38,6 +38,8 @@ struct UiRunResult {
   // is still the viewer's at the end, and the first write error.
   std::size_t recorded_commands = 0, recorded_hashes = 0;
   std::string recording_error;
+  // The exports' summary line and first write error, when the session at the end has them.
+  std::string exports_summary, exports_error;
   std::vector<std::string> model_object_names;
   std::size_t ui_frames = 0;
   double ui_frame_mean_ms = 0.0, ui_frame_max_ms = 0.0;  // wall time per UI frame

@@ -134,6 +134,7 @@ void Viewer::open_scene(const std::string& path, const std::string& record_path)
   // Load first: a bad scene leaves the running one alone.
   SessionOptions options = options_.session;
   options.record_path = record_path;
+  if (session_) options.exports = {};  // like --record, the exports are the first session's
   // Without a device, the mouse drives the probe through the physics thread's interpolation.
   auto pointer = options_.device ? nullptr : std::make_unique<PointerProbe>();
   if (pointer) options.loop.probe_source = pointer.get();

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "ffd/run_exports.h"
+
 namespace ffdsim {
 
 // Exit codes shared by the subcommands (the README's table; tests/ui/exit_codes_test.cpp holds
@@ -26,13 +28,21 @@ void ensure_parent_folder(const std::string& file_path);
 int thread_count(int option);
 void add_threads_option(CLI::App& command, int& threads);
 
+// --surfaces-every K --surfaces DIR --surface-format obj|ply --series FILE (run, replay;
+// simulate has the surfaces): README.md, "Exports".
+struct ExportArguments {
+  long long surfaces_every = 0;
+  std::string surfaces_dir, surface_format = "obj", series_path;
+  ffd::ExportOptions options() const;
+};
+void add_export_options(CLI::App& command, ExportArguments& arguments, bool series = true, bool older_names = false);
+
 struct SimulateOptions {
   std::string scene;  // empty = the default scene
   long long steps = 3000;
   int threads = 0;
   std::string report_path;
-  long long obj_every = 0;
-  std::string out_dir;
+  ExportArguments exports;  // the surfaces only (--obj-every K --out DIR are their older names)
   bool quiet = false;
 };
 void register_simulate(CLI::App& app, SimulateOptions& options);
@@ -48,6 +58,7 @@ struct ReplayOptions {
   bool quiet = false;
   bool scene_from_recording = false;  // a recording: its embedded scene text, not the scene file
   bool allow_changed = false;         // a recording: the files as they are now, even if changed
+  ExportArguments exports;
 };
 void register_replay(CLI::App& app, ReplayOptions& options);
 int run_replay_command(const ReplayOptions& options);
@@ -72,6 +83,7 @@ struct RunOptions {
   std::string device_url;
   bool device_allow_remote = false;
   double force_limit_n = -1.0, force_rate_limit = -1.0, watchdog_ms = -1.0;  // < 0: the scene's
+  ExportArguments exports;
 };
 void register_run(CLI::App& app, RunOptions& options);
 int run_run(const RunOptions& options);

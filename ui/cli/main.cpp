@@ -19,6 +19,33 @@ void add_threads_option(CLI::App& command, int& threads) {
       ->check(CLI::Range(1, 64));
 }
 
+void add_export_options(CLI::App& command, ExportArguments& a, bool series, bool older_names) {
+  // simulate's --obj-every and --out came first and still work.
+  CLI::Option* every = command
+                           .add_option(older_names ? "--surfaces-every,--obj-every" : "--surfaces-every", a.surfaces_every,
+                                       "Write the deformed surfaces every K steps (step 0 included)")
+                           ->check(CLI::Range(1LL, 1000000000LL));
+  CLI::Option* dir = command.add_option(older_names ? "--surfaces,--out" : "--surfaces", a.surfaces_dir, "Folder for the surfaces: DIR/<object>_<step>.obj");
+  every->needs(dir);
+  dir->needs(every);
+  command.add_option("--surface-format", a.surface_format, "Surface files as obj (text) or ply (binary)")
+      ->check(CLI::IsMember({"obj", "ply"}))
+      ->capture_default_str();
+  if (series)
+    command.add_option("--series", a.series_path,
+                       "Write a per-step time series (energy, contacts, penetration, stage times) to FILE.csv or "
+                       "FILE.json");
+}
+
+ffd::ExportOptions ExportArguments::options() const {
+  ffd::ExportOptions o;
+  o.surfaces_every = static_cast<std::uint64_t>(surfaces_every);
+  o.surfaces_dir = surfaces_dir;
+  o.surface_format = ffd::parse_surface_format(surface_format);
+  o.series_path = series_path;
+  return o;
+}
+
 void ensure_folder(const std::string& dir) {
   if (dir.empty()) return;
   std::error_code ec;

@@ -1,5 +1,6 @@
 // `ffdsim replay FILE`: runs a replay script headless and checks its assertions.
 #include <cstdio>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 
@@ -28,17 +29,24 @@ void register_replay(CLI::App& app, ReplayOptions& o) {
                 "(the replay reports the first diverging step)")
       ->excludes(from_recording);
   add_threads_option(*cmd, o.threads);
+  add_export_options(*cmd, o.exports);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only failures and errors");
 }
 
 int run_replay_command(const ReplayOptions& o) {
   ffd::LoadedReplay replay;
+  std::optional<ffd::RunExports> exports;
   try {
     const ffd::RecordedScene recorded = o.scene_from_recording ? ffd::RecordedScene::FromRecording
                                         : o.allow_changed      ? ffd::RecordedScene::AllowChanged
                                                                : ffd::RecordedScene::MustMatch;
     replay = ffd::load_replay_file(o.script, {}, recorded);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
+    if (o.exports.options().any()) {
+      std::vector<std::string> sources;
+      for (const ffd::ObjectSpec& object : replay.script.scene.objects) sources.push_back(object.source);
+      exports.emplace(replay.model, ffd::initial_state(replay.model), std::move(sources), o.exports.options());
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
@@ -50,7 +58,16 @@ int run_replay_command(const ReplayOptions& o) {
   run.budget_ns = static_cast<std::int64_t>(o.budget_us * 1000.0);
   run.check_latency = !o.skip_latency;
   run.threads = thread_count(o.threads);
+  run.exports = exports ? &*exports : nullptr;
   const ffd::ReplayResult result = ffd::run_replay(replay, run);
+  if (exports) {
+    exports->finish();
+    if (!exports->error().empty()) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", exports->error().c_str());
+      return kExitBadInput;
+    }
+    if (!o.quiet) std::printf("%s\n", exports->summary().c_str());
+  }
   const std::string text = ffd::format_replay_result(replay.script, result);
   if (!o.quiet || !result.passed()) std::fputs(text.c_str(), result.passed() ? stdout : stderr);
   if (!result.passed() && replay.script.recorded && replay.script.recorded->ffdsim != ffd::ffdsim_version())

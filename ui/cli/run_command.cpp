@@ -56,6 +56,7 @@ struct RunFigures {
   // --record: the file was written as the run went; its figures and the first write error.
   std::size_t recorded_commands = 0, recorded_hashes = 0;
   std::string recording_error;
+  std::string exports_summary, exports_error;  // --surfaces-every, --series
   nlohmann::json ui;  // UI figures, when a viewer ran
   const ffd::device::DeviceLink* device = nullptr;  // --device
 };
@@ -174,6 +175,16 @@ int report(const RunOptions& o, const RunFigures& f) {
     std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
     status = kExitBadInput;
   }
+  if (!f.exports_error.empty()) {
+    std::fprintf(stderr, "ffdsim: error: %s\n", f.exports_error.c_str());
+    status = kExitBadInput;
+  } else if (!f.exports_summary.empty() && !o.quiet) {
+    std::printf("%s\n", f.exports_summary.c_str());
+  }
+  if (f.counters.snapshots_dropped > 0)  // the writer fell behind the real-time loop
+    std::fprintf(stderr, "ffdsim: warning: the surfaces of %llu steps were dropped (written too slowly for real "
+                 "time: a larger --surfaces-every, or replay --fast with the recording, writes them all)\n",
+                 static_cast<unsigned long long>(f.counters.snapshots_dropped));
   if (!o.record_path.empty()) {  // written as the run went (Session, recording.h)
     if (!f.recording_error.empty()) {
       std::fprintf(stderr, "ffdsim: error: %s\n", f.recording_error.c_str());
@@ -224,6 +235,7 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path, ffd
   options.loop = loop_options(o, device);
   options.loop.frame_boxes = false;  // nobody draws them
   options.record_path = o.record_path;
+  options.exports = o.exports.options();
   ffd::ui::Session session(scene_path, options);
   const auto start = std::chrono::steady_clock::now();
   const auto end = start + std::chrono::duration<double>(o.seconds > 0.0 ? o.seconds : 10.0);
@@ -243,6 +255,10 @@ RunFigures run_loop_only(const RunOptions& o, const std::string& scene_path, ffd
   RunFigures f = figures_of(session, "headless loop");
   f.scene_path = scene_path;
   f.device = device;
+  if (const ffd::RunExports* e = session.exports()) {
+    f.exports_summary = e->summary();
+    f.exports_error = e->error();
+  }
   if (const ffd::RecordingStream* r = session.recording()) {
     f.recorded_commands = r->commands();
     f.recorded_hashes = r->hashes();
@@ -279,6 +295,7 @@ void register_run(CLI::App& app, RunOptions& o) {
                 "Budget-aware accuracy: run the most accurate collision level whose steps fit the budget (from the "
                 "scene's level up); each switch is recorded");
   cmd->add_option("--spin-us", o.spin_us, "Busy-wait before each release, microseconds")->check(CLI::Range(0.0, 1e6));
+  add_export_options(*cmd, o.exports);
   add_threads_option(*cmd, o.threads);
   cmd->add_option("--device", o.device_url,
                   "A haptic device bridge drives the probe over UDP at this address, udp://127.0.0.1:PORT (README, "
@@ -331,6 +348,8 @@ int run_run(const RunOptions& given) {
     scene_path = std::filesystem::absolute(scene).lexically_normal().string();
     std::vector<std::string> log;
     model = ffd::compile_scene(ffd::load_scene_file(scene_path), scene_path, log);
+    for (const std::string& line : log)  // e.g. objects that start inside each other
+      if (line.rfind("warning: ", 0) == 0 && !o.quiet) std::fprintf(stderr, "ffdsim: %s: %s\n", scene_path.c_str(), line.c_str());
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (!o.record_path.empty()) ensure_parent_folder(o.record_path);
     if (!o.frames_dir.empty()) ensure_folder(o.frames_dir);
@@ -372,6 +391,7 @@ int run_run(const RunOptions& given) {
     u.viewer.session.loop = loop_options(o, device.get());
     u.viewer.device = device.get();
     u.viewer.session.record_path = o.record_path;
+    u.viewer.session.exports = o.exports.options();
     u.script = script;
     const bool window = !o.headless && !demo;
     u.seconds = o.seconds > 0.0 ? o.seconds : script ? script_guard_seconds(*script) : window ? 0.0 : 10.0;
@@ -427,6 +447,8 @@ int run_run(const RunOptions& given) {
     figures.recorded_commands = r.recorded_commands;
     figures.recorded_hashes = r.recorded_hashes;
     figures.recording_error = r.recording_error;
+    figures.exports_summary = r.exports_summary;
+    figures.exports_error = r.exports_error;
     figures.ui = {{"renderer", r.renderer},         {"frames", r.ui_frames},
                   {"frame_mean_ms", r.ui_frame_mean_ms}, {"frame_max_ms", r.ui_frame_max_ms},
                   {"png_frames", r.frames_written}, {"script_events", r.script_events},

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "commands.h"
 #include "ffd/measure.h"
@@ -19,28 +20,6 @@
 namespace ffdsim {
 
 namespace {
-
-// `source` is where the surface came from: a letter of a font carries the font's notice.
-void write_obj(const std::filesystem::path& path, const ffd::SurfaceMesh& mesh, const std::string& source) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
-  if (source.find(".ttf U+") != std::string::npos)
-    out << "# An extruded glyph of " << source << ". The font's copyright and permission notice\n"
-        << "# (Bitstream Vera licence) applies: see scenarios/meshes/DejaVu-LICENSE.txt in ffdsim.\n";
-  out.precision(9);
-  for (const ffd::Vec3& v : mesh.vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
-  for (const auto& t : mesh.triangles) out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
-
-void write_surfaces(const std::filesystem::path& dir, const ffd::SceneSpec& spec, const ffd::Model& model,
-                    const ffd::State& state) {
-  char step[32];
-  std::snprintf(step, sizeof step, "%06llu", static_cast<unsigned long long>(state.step));
-  for (ffd::Index i = 0; i < model.objects.size(); ++i)
-    write_obj(dir / (model.objects[i].name + "_" + step + ".obj"), ffd::deformed_surface(model, state, i),
-              spec.objects[i].source);
-}
 
 void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::StepStatistics& stats) {
   std::printf("scene %s: %llu steps of %.3g ms\n", run.scene.c_str(), static_cast<unsigned long long>(run.steps),
@@ -99,11 +78,7 @@ void register_simulate(CLI::App& app, SimulateOptions& o) {
   cmd->add_option("scene", o.scene, "Scene file (TOML); default: two teapots dropped on a floor");
   cmd->add_option("--steps", o.steps, "Number of fixed steps to run")->check(CLI::Range(1LL, 1000000000LL));
   cmd->add_option("--report", o.report_path, "Write the JSON run report to this file");
-  CLI::Option* every = cmd->add_option("--obj-every", o.obj_every, "Write the deformed surfaces every K steps")
-                           ->check(CLI::Range(1LL, 1000000000LL));
-  CLI::Option* out = cmd->add_option("--out", o.out_dir, "Folder for the OBJ files of --obj-every");
-  every->needs(out);
-  out->needs(every);
+  add_export_options(*cmd, o.exports, /*series=*/false, /*older_names=*/true);
   add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
@@ -116,7 +91,6 @@ int run_simulate(const SimulateOptions& o) {
     const ffd::Model model = ffd::compile_scene(spec, scene_path, log);
     if (!o.quiet)
       for (const std::string& line : log) std::fprintf(stderr, "ffdsim: %s\n", line.c_str());
-    ensure_folder(o.out_dir);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     ffd::State state = ffd::initial_state(model);
     ffd::Scratch scratch = ffd::make_scratch(model);
@@ -129,13 +103,18 @@ int run_simulate(const SimulateOptions& o) {
     // On a terminal only: a log or CI gets the summary alone.
     ProgressBar progress("ffdsim simulate", o.quiet, /*lines_off_terminal=*/false);
     const std::uint64_t total = static_cast<std::uint64_t>(o.steps);
-    if (o.obj_every > 0) write_surfaces(o.out_dir, spec, model, state);
+    std::vector<std::string> sources;
+    for (const ffd::ObjectSpec& object : spec.objects) sources.push_back(object.source);
+    std::optional<ffd::RunExports> exports;
+    if (o.exports.surfaces_every > 0) exports.emplace(model, state, std::move(sources), o.exports.options());
     for (long long i = 0; i < o.steps; ++i) {
       ffd::step(model, state, scratch, report);
       stats.add(report);
       ffd::grow_scratch(model, scratch, report);
-      if (o.obj_every > 0 && state.step % static_cast<std::uint64_t>(o.obj_every) == 0)
-        write_surfaces(o.out_dir, spec, model, state);
+      if (exports) {
+        exports->snapshot(state.step, state.x);
+        if (!exports->error().empty()) throw std::runtime_error(exports->error());
+      }
       progress(spec.name, static_cast<std::uint64_t>(i + 1), total);
     }
     progress.clear();

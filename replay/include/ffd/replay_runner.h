@@ -9,6 +9,7 @@
 
 #include "ffd/physics_loop.h"
 #include "ffd/replay_script.h"
+#include "ffd/run_exports.h"
 #include "ffd/step_statistics.h"
 
 namespace ffd {
@@ -64,6 +65,7 @@ struct ReplayRunOptions {
   // is tens of times slower and time limits say nothing about the product).
   bool check_latency = true;
   int threads = 1;  // a step spread over this many threads (the same results whatever the count)
+  RunExports* exports = nullptr;  // surfaces and time series to write as the run goes (not owned)
 };
 
 ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& options);

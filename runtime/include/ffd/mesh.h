@@ -35,14 +35,24 @@ struct MeshCleanReport {
   std::size_t stray_components = 0;
   std::size_t output_vertices = 0;
   std::size_t output_triangles = 0;
+  bool turned_outward = false;        // closed and wound inside out: every triangle flipped
+  double inside_out_volume_m3 = 0.0;  // the (negative) volume it enclosed as given
   // One line saying what was cleaned, e.g. "welded 403 duplicate vertices; ...", or "clean".
   std::string summary() const;
 };
 
-// Returns the cleaned mesh; `report` says what was removed. Throws std::invalid_argument
+// Returns the cleaned mesh, turned outward if it was closed and wound inside out; `report`
+// says what was removed or turned. Throws std::invalid_argument
 // when nothing is left (no triangles) or an index is out of range.
 SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options,
                        MeshCleanReport& report);
+
+// Signed volume enclosed by a closed surface (m^3): positive when its triangles wind
+// counter-clockwise seen from outside (normals out). Only its sign (-1, 0 or 1) where the
+// mesh is more than 1e100 m or less than 1e-100 m across.
+double enclosed_volume(const SurfaceMesh& mesh);
+// Every edge has exactly two triangles, which wind it in opposite directions.
+bool is_closed_and_consistent(const SurfaceMesh& mesh);
 
 // `levels` rounds of 1-to-4 midpoint subdivision: every triangle becomes four, edge
 // midpoints shared by both triangles of an edge (the surface stays closed where it was).

@@ -41,5 +41,8 @@ struct PairContactMetrics {
 
 // Vertex-to-surface both ways between two posed meshes, within search_radius.
 PairContactMetrics measure_pair(const SurfaceMesh& a, const SurfaceMesh& b, double search_radius);
+// The same with each mesh's distance helper built already (one per mesh, whatever its pairs).
+PairContactMetrics measure_pair(const SurfaceMesh& a, const SurfaceDistance& distance_to_a, const SurfaceMesh& b,
+                                const SurfaceDistance& distance_to_b, double search_radius);
 
 }  // namespace ffd
