@@ -10,7 +10,7 @@ namespace {
 
 const std::vector<std::string_view> kRootKeys = {"format", "version", "description", "scene", "duration_ms", "size", "input"};
 const std::vector<std::string_view> kInputKeys = {"at_ms", "mouse", "mouse_to", "widget", "fraction", "offset",
-                                                  "glide_ms", "press", "release", "key", "wheel"};
+                                                  "glide_ms", "press", "release", "key", "wheel", "text"};
 const std::vector<std::string_view> kButtons = {"left", "right", "middle"};
 constexpr double kMaxMs = 1e9;
 
@@ -43,7 +43,7 @@ std::string location(const std::string& origin, const toml::table& table, const 
 }  // namespace
 
 const std::vector<std::string>& ui_script_key_names() {
-  static const std::vector<std::string> names = {"space", "p", "r", "s", "f", "h", "l", "b", "c", "escape"};
+  static const std::vector<std::string> names = {"space", "p", "r", "s", "f", "h", "l", "b", "c", "escape", "enter"};
   return names;
 }
 
@@ -111,8 +111,12 @@ UiScript parse_ui_script(const std::string& text, const std::string& origin, con
       }
     }
     e.wheel = static_cast<float>(t.number("wheel", 0.0, {-100.0, 100.0}));
-    if (targets == 0 && !t.has("offset") && e.press < 0 && e.release < 0 && e.key.empty() && e.wheel == 0.0f)
-      t.fail_here(path, "does nothing: give a cursor target, press, release, key or wheel");
+    // Typed into the text field that has the keyboard (a click on it first), before `key`.
+    e.text = t.string("text").value_or("");
+    if (e.text.size() > 4096) t.fail_at("text", "is longer than 4096 bytes");
+    if (targets == 0 && !t.has("offset") && e.press < 0 && e.release < 0 && e.key.empty() && e.wheel == 0.0f &&
+        e.text.empty())
+      t.fail_here(path, "does nothing: give a cursor target, press, release, key, text or wheel");
     script.events.push_back(std::move(e));
   }
   return script;

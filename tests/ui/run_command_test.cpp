@@ -72,3 +72,61 @@ TEST_CASE("run: a shorter run into the same frames folder leaves only its own fr
   CHECK(std::filesystem::exists(frames / "notes.txt"));  // what the run does not own stays
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+// A UI script that clicks the scene path field, types `path` and presses Enter.
+std::string open_by_path_script(const std::string& path, int duration_ms) {
+  return "format = \"ffdsim-ui-script\"\nversion = 1\nduration_ms = " + std::to_string(duration_ms) +
+         "\nsize = [1280, 720]\n"
+         "[[input]]\nat_ms = 200\nwidget = \"scene_path\"\n"
+         "[[input]]\nat_ms = 250\npress = \"left\"\n"
+         "[[input]]\nat_ms = 300\nrelease = \"left\"\n"
+         "[[input]]\nat_ms = 350\ntext = \"" + path + "\"\n"
+         "[[input]]\nat_ms = 400\nkey = \"enter\"\n";
+}
+}  // namespace
+
+TEST_CASE("Viewer in a window under Xvfb: a scene outside the scene folder opens by its path and joins the recent "
+          "scenes", "[viewer]") {
+  const std::filesystem::path dir = test::fresh_temp_dir("open_by_path");
+  std::filesystem::create_directories(dir / "elsewhere");
+  const std::filesystem::path scene = dir / "elsewhere" / "my_scene.toml";
+  std::filesystem::copy_file(std::string(FFDSIM_TEST_DATA_DIR) + "/scenes/probe_and_grab.toml", scene);
+  std::ofstream(dir / "open.toml") << open_by_path_script(scene.string(), 1200);
+  const std::string report = (dir / "report.json").string();
+  const test::ProgramResult r = test::run_shell(
+      "env XDG_CONFIG_HOME=" + (dir / "config").string() + " xvfb-run -a -s '-screen 0 1280x720x24' " FFDSIM_BINARY
+      " run --window --input " + (dir / "open.toml").string() + " --report " + report + " " + kMinimal);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("opened " + scene.string()));
+  const nlohmann::json j = read_json(report);
+  CHECK(j.at("mode") == "window");
+  CHECK(j.at("scene") == scene.string());  // the session at the end is the scene opened by path
+  // The recent scenes, newest first, kept for the next run.
+  std::ifstream recent(dir / "config" / "ffdsim" / "recent_scenes");
+  std::string first, second;
+  std::getline(recent, first);
+  std::getline(recent, second);
+  CHECK(first == scene.string());
+  CHECK(second == std::filesystem::path(kMinimal).lexically_normal().string());
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Viewer: the scene reloads when its file changes on disk; a change that does not load leaves it running",
+          "[viewer]") {
+  const std::filesystem::path dir = test::fresh_temp_dir("reload");
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path scene = dir / "scene.toml";
+  std::filesystem::copy_file(kMinimal, scene);
+  // While the headless viewer runs for 4 s: at 1.5 s a valid edit, at 2.5 s a broken one.
+  const test::ProgramResult r = test::run_shell(
+      "(sleep 1.5; echo '# edited' >> " + scene.string() + "; sleep 1; echo 'broken = ' >> " + scene.string() +
+      ") & env XDG_CONFIG_HOME=" + (dir / "config").string() + " " FFDSIM_BINARY " run --headless --seconds 4 --frames " +
+      (dir / "frames").string() + " " + scene.string() + "; status=$?; wait; exit $status");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("reloaded " + scene.string() + ": it changed on disk"));
+  CHECK_THAT(r.output, Catch::Contains("not reloaded: " + scene.string() + ":"));
+  std::filesystem::remove_all(dir);
+}

@@ -22,6 +22,7 @@ Key key_from_name(const std::string& name) {
   if (name == "b") return Key::B;
   if (name == "c") return Key::C;
   if (name == "escape") return Key::Escape;
+  if (name == "enter") return Key::Enter;
   return Key::None;
 }
 
@@ -85,6 +86,16 @@ InputState ScriptedInput::next(const Viewer& viewer, std::uint64_t newest_step, 
   }
   if (e.press >= 0) state_.buttons[static_cast<std::size_t>(e.press)] = true;
   if (e.release >= 0) state_.buttons[static_cast<std::size_t>(e.release)] = false;
+  // UTF-8 to code points (the parser checked the text is valid TOML, so valid UTF-8).
+  for (std::size_t i = 0; i < e.text.size();) {
+    const auto byte = static_cast<unsigned char>(e.text[i]);
+    const int length = byte < 0x80 ? 1 : byte < 0xE0 ? 2 : byte < 0xF0 ? 3 : 4;
+    unsigned code = length == 1 ? byte : byte & (0x3Fu >> (length - 1));
+    for (int k = 1; k < length && i + static_cast<std::size_t>(k) < e.text.size(); ++k)
+      code = code << 6 | (static_cast<unsigned char>(e.text[i + static_cast<std::size_t>(k)]) & 0x3Fu);
+    state_.characters.push_back(code);
+    i += static_cast<std::size_t>(length);
+  }
   if (!e.key.empty()) {
     const Key k = key_from_name(e.key);
     state_.pressed.push_back(k);

@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
@@ -34,6 +36,16 @@ std::vector<std::string> list_scenes(const std::string& folder) {
     if (entry.path().extension() == ".toml") files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   return files;
+}
+
+constexpr std::size_t kRecentScenes = 8;
+
+std::vector<std::string> read_recent(const std::string& file) {
+  std::vector<std::string> paths;
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line) && paths.size() < kRecentScenes;)
+    if (!line.empty()) paths.push_back(line);
+  return paths;
 }
 
 std::string timestamp() {
@@ -88,6 +100,14 @@ void plot_history(const char* label, const float* values, std::size_t count, std
 
 }  // namespace
 
+std::string default_recent_file() {
+  const char* config = std::getenv("XDG_CONFIG_HOME");
+  const char* home = std::getenv("HOME");
+  if (config && *config) return std::string(config) + "/ffdsim/recent_scenes";
+  if (home && *home) return std::string(home) + "/.config/ffdsim/recent_scenes";
+  return "";
+}
+
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   IMGUI_CHECKVERSION();
   imgui_ = ImGui::CreateContext();
@@ -111,6 +131,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   if (options_.scenes_folder.empty())
     options_.scenes_folder = std::filesystem::path(default_scene_path()).parent_path().string();
   scene_files_ = list_scenes(options_.scenes_folder);
+  if (!options_.recent_file.empty()) recent_scenes_ = read_recent(options_.recent_file);
   // `--record`: the first session is recorded as it runs, as the Record button would.
   const std::string record_path = options_.session.record_path;
   open_scene(options_.scene_path.empty() ? default_scene_path() : options_.scene_path, record_path);
@@ -143,6 +164,9 @@ void Viewer::open_scene(const std::string& path, const std::string& record_path)
   pointer_probe_ = std::move(pointer);
   renderer_.reset();
   session_ = std::move(session);
+  std::error_code unknown_time;
+  scene_written_ = std::filesystem::last_write_time(session_->scene_path(), unknown_time);
+  remember_recent(session_->scene_path());
   renderer_ = std::make_unique<SceneRenderer>(session_->model());
   const State& initial = session_->initial();
   stiffness_.assign(initial.params.stiffness.begin(), initial.params.stiffness.end());
@@ -159,6 +183,48 @@ void Viewer::open_scene(const std::string& path, const std::string& record_path)
   }
   camera_.frame(lo.cast<float>(), hi.cast<float>());
   camera_.distance *= 1.15f;
+}
+
+void Viewer::open_scene_from_ui(const std::string& path) {
+  try {
+    open_scene(std::filesystem::absolute(path).lexically_normal().string());
+    note("opened " + session_->scene_path());
+  } catch (const std::exception& e) {
+    note(e.what());  // the running scene goes on
+  }
+}
+
+void Viewer::reload_if_changed() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now < next_reload_check_) return;
+  next_reload_check_ = now + std::chrono::milliseconds(500);
+  std::error_code error;
+  const auto written = std::filesystem::last_write_time(session_->scene_path(), error);
+  if (error || written == scene_written_) return;
+  scene_written_ = written;  // a scene that does not load is not retried until it changes again
+  const std::string path = session_->scene_path();
+  try {
+    open_scene(path);
+    note("reloaded " + path + ": it changed on disk");
+  } catch (const std::exception& e) {
+    note(std::string("not reloaded: ") + e.what());
+  }
+}
+
+void Viewer::remember_recent(const std::string& path) {
+  recent_scenes_.erase(std::remove(recent_scenes_.begin(), recent_scenes_.end(), path), recent_scenes_.end());
+  recent_scenes_.insert(recent_scenes_.begin(), path);
+  if (recent_scenes_.size() > kRecentScenes) recent_scenes_.resize(kRecentScenes);
+  if (options_.recent_file.empty()) return;
+  std::error_code error;
+  std::filesystem::create_directories(std::filesystem::path(options_.recent_file).parent_path(), error);
+  std::ofstream out(options_.recent_file, std::ios::trunc);
+  for (const std::string& p : recent_scenes_) out << p << '\n';
+  if (!out) {
+    const std::string file = options_.recent_file;
+    options_.recent_file.clear();  // said once; the list still works for this run
+    note(file + ": cannot write the recent scenes");
+  }
 }
 
 void Viewer::note(std::string message) {
@@ -211,6 +277,7 @@ void Viewer::feed_imgui(const InputState& input, int width, int height, float dt
 
 void Viewer::frame(const InputState& input, int width, int height, float dt_s) {
   ImGui::SetCurrentContext(imgui_);
+  reload_if_changed();
   session_->poll();
   feed_imgui(input, width, height, dt_s);
   ImGui_ImplOpenGL3_NewFrame();
@@ -394,6 +461,27 @@ void Viewer::scene_panel() {
     ImGui::EndCombo();
   }
   remember("scene");
+  // Any scene by its path (Enter or Open), and the ones opened last.
+  ImGui::SetNextItemWidth(-ImGui::CalcTextSize("Open").x - 3.0f * ImGui::GetStyle().FramePadding.x -
+                          ImGui::GetStyle().ItemSpacing.x);
+  const bool entered = ImGui::InputTextWithHint("##scene_path", "path/to/scene.toml", scene_path_edit_,
+                                                sizeof scene_path_edit_, ImGuiInputTextFlags_EnterReturnsTrue);
+  remember("scene_path");
+  ImGui::SameLine();
+  const bool clicked = ImGui::Button("Open");
+  remember("open_scene");
+  if (entered || clicked) open_scene_from_ui(scene_path_edit_);
+  if (recent_scenes_.size() > 1) {
+    ImGui::SetNextItemWidth(-1.0f);
+    if (ImGui::BeginCombo("##recent", "recent scenes")) {
+      std::string chosen;
+      for (const std::string& path : recent_scenes_)
+        if (ImGui::Selectable(path.c_str(), path == session_->scene_path())) chosen = path;
+      ImGui::EndCombo();
+      if (!chosen.empty()) open_scene_from_ui(chosen);
+    }
+    remember("recent");
+  }
   frame = session_->frame();
   const double seconds = frame ? static_cast<double>(frame->step) * session_->model().settings.dt : 0.0;
   ImGui::Text("step %llu  ·  %.3f s%s", static_cast<unsigned long long>(frame ? frame->step : 0), seconds,
@@ -462,7 +550,10 @@ void Viewer::tuning_panel() {
   const bool automatic = frame && frame->auto_accuracy;
   char level_label[64];
   std::snprintf(level_label, sizeof level_label, "%d %s", level, accuracy_name(static_cast<Accuracy>(level)));
-  if (ImGui::BeginCombo("accuracy", level_label)) {
+  // The longest level name ("2 FFD AABB + centre of mass") needs the panel's whole width.
+  ImGui::TextUnformatted("accuracy");
+  ImGui::SetNextItemWidth(-1.0f);
+  if (ImGui::BeginCombo("##accuracy", level_label)) {
     for (int l = 0; l < kAccuracyLevels; ++l) {
       std::snprintf(level_label, sizeof level_label, "%d %s", l, accuracy_name(static_cast<Accuracy>(l)));
       if (ImGui::Selectable(level_label, l == level)) {

@@ -2,6 +2,8 @@
 // The interactive viewer: a scene on the physics loop, drawn with the SceneRenderer and
 // steered with ImGui panels and the mouse. Platform-free: the GLFW window and the headless
 // EGL runner both create a GL context, feed an InputState per frame and call frame().
+#include <chrono>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -18,10 +20,15 @@ struct ImGuiContext;
 
 namespace ffd::ui {
 
+std::string default_recent_file();
+
 struct ViewerOptions {
   std::string scene_path;       // the scene to open
   std::string scenes_folder;    // the scene picker lists the *.toml files here
   std::string recordings_folder = "out/recordings";
+  // The scenes opened last, newest first, kept between runs (empty: not kept). Default:
+  // $XDG_CONFIG_HOME/ffdsim/recent_scenes, else ~/.config/ffdsim/recent_scenes.
+  std::string recent_file = default_recent_file();
   SessionOptions session;
   const device::DeviceLink* device = nullptr;  // a haptic device on the probe: its panel shows the link
 };
@@ -62,6 +69,11 @@ class Viewer {
  private:
   // `record_path`: record the new session to this file as it runs (empty: no recording).
   void open_scene(const std::string& path, const std::string& record_path = "");
+  // The scene opened by the path field, Enter or the Open button, or the recent list.
+  void open_scene_from_ui(const std::string& path);
+  // Reopens the scene when its file changed on disk (checked twice a second).
+  void reload_if_changed();
+  void remember_recent(const std::string& path);
   void feed_imgui(const InputState& input, int width, int height, float dt_s);
   void panels(int width, int height);
   void scene_panel();
@@ -92,6 +104,10 @@ class Viewer {
   PointerMode mode_ = PointerMode::Grab;
   bool quit_ = false, show_help_ = true;
   std::vector<std::string> scene_files_;
+  char scene_path_edit_[1024] = {};
+  std::vector<std::string> recent_scenes_;  // newest first, at most kRecentScenes
+  std::filesystem::file_time_type scene_written_{};  // the scene file's time when it was opened
+  std::chrono::steady_clock::time_point next_reload_check_{};
   std::map<std::string, PixelRect> widgets_;
   std::vector<std::string> messages_;
   std::vector<Command> sent_;

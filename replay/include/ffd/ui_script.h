@@ -22,7 +22,8 @@ struct UiInputEvent {
   double glide_ms = 0.0;          // move there over this much simulated time (0: jump)
   // Then, in this order:
   int press = -1, release = -1;   // mouse button: 0 left, 1 right, 2 middle
-  std::string key;                // a shortcut key name: "p", "space", "r", ...
+  std::string text;               // UTF-8 typed into the focused text field (before `key`)
+  std::string key;                // a key name: "p", "space", "r", "enter", ...
   float wheel = 0.0f;             // clicks
 };
 
