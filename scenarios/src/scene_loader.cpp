@@ -703,7 +703,22 @@ Model compile_scene(const SceneSpec& spec, const std::string& path, std::vector<
   }
 }
 
-std::string default_scene_path() { return FFDSIM_SCENARIO_DIR "/scenes/two_teapots.toml"; }
+std::string scenario_dir() {
+  // Installed (cmake --install): <prefix>/bin/ffdsim beside <prefix>/share/ffdsim/scenes. In
+  // the build tree the program finds its scenes in the source tree it was built from.
+  static const std::string dir = [] {
+    std::error_code error;
+    const std::filesystem::path program = std::filesystem::read_symlink("/proc/self/exe", error);
+    if (!error) {
+      const std::filesystem::path installed = program.parent_path().parent_path() / "share" / "ffdsim";
+      if (std::filesystem::is_directory(installed / "scenes", error)) return installed.string();
+    }
+    return std::string(FFDSIM_SCENARIO_DIR);
+  }();
+  return dir;
+}
+
+std::string default_scene_path() { return scenario_dir() + "/scenes/two_teapots.toml"; }
 
 SceneSpec default_scene() { return load_scene_file(default_scene_path()); }
 

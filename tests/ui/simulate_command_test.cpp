@@ -240,3 +240,27 @@ TEST_CASE("objects that overlap at the start are named with the depth, by simula
   CHECK(r.output.find("below the plane") == std::string::npos);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("the README's own-mesh walkthrough scene runs as it says, on a 100 mm cube in millimetres", "[cli]") {
+  std::ifstream readme(std::string(FFDSIM_SCENARIO_DIR) + "/../README.md");
+  REQUIRE(readme);
+  const std::string text((std::istreambuf_iterator<char>(readme)), std::istreambuf_iterator<char>());
+  const std::size_t begin = text.find("<!-- walkthrough:begin -->\n```toml\n");
+  const std::size_t end = text.find("```\n<!-- walkthrough:end -->");
+  REQUIRE(begin != std::string::npos);
+  REQUIRE(end != std::string::npos);
+  const std::string scene = text.substr(begin + 35, end - begin - 35);
+  const std::filesystem::path dir = temp_dir("walkthrough");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "my_scene.toml") << scene;
+  std::ofstream(dir / "my_part.obj") << "v 0 0 0\nv 100 0 0\nv 0 100 0\nv 100 100 0\nv 0 0 100\nv 100 0 100\n"
+                                        "v 0 100 100\nv 100 100 100\nf 1 3 2\nf 2 3 4\nf 5 6 7\nf 6 8 7\nf 1 2 5\n"
+                                        "f 2 6 5\nf 3 7 4\nf 4 7 8\nf 1 5 3\nf 3 5 7\nf 2 4 6\nf 4 8 6\n";
+  const Result r = run_ffdsim("simulate " + (dir / "my_scene.toml").string() + " --steps 2000");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("lattice 15x15x15 of 0.007 m cells"));  // as step 5 says
+  CHECK_THAT(r.output, Catch::Contains("finite true"));
+  CHECK(r.output.find("warning") == std::string::npos);
+  std::filesystem::remove_all(dir);
+}

@@ -42,8 +42,8 @@ int run_accuracy_command(const AccuracyOptions& o) {
     }
     std::vector<std::string> scenes = o.scenes;
     if (scenes.empty())
-      scenes = {std::string(FFDSIM_SCENARIO_DIR) + "/scenes/two_teapots.toml",
-                std::string(FFDSIM_SCENARIO_DIR) + "/scenes/five_bunnies_hard.toml"};
+      scenes = {ffd::scenario_dir() + "/scenes/two_teapots.toml",
+                ffd::scenario_dir() + "/scenes/five_bunnies_hard.toml"};
     std::vector<int> levels = o.levels;
     if (levels.empty())
       for (int l = 0; l < ffd::kAccuracyLevels; ++l) levels.push_back(l);

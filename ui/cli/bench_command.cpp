@@ -10,6 +10,7 @@
 #include "bench/broad_phase_race.h"
 #include "bench/paper_table.h"
 #include "commands.h"
+#include "ffd/scene_loader.h"
 #include "output_files.h"
 
 namespace ffdsim {
@@ -56,7 +57,7 @@ int run_bench(const BenchOptions& o) {
     std::vector<ffdbench::ScenarioResult> results;
     bool finite = true;
     for (const ffdbench::Scenario& scenario : chosen) {
-      results.push_back(ffdbench::bench_scenario(scenario, FFDSIM_SCENARIO_DIR, o.quick, std::max(2, thread_count(o.threads)),
+      results.push_back(ffdbench::bench_scenario(scenario, ffd::scenario_dir(), o.quick, std::max(2, thread_count(o.threads)),
                                                  std::ref(progress)));
       const ffdbench::ScenarioResult& r = results.back();
       finite = finite && r.finite;

@@ -36,7 +36,7 @@ void print_distribution(const char* name, const ffd::TimeSummary& d) {
   std::printf("%-9s us: p50 %8.1f  p99 %8.1f  p99.9 %8.1f  max %8.1f\n", name, d.p50_us, d.p99_us, d.p999_us, d.max_us);
 }
 
-std::string demo_script_path() { return FFDSIM_SCENARIO_DIR "/ui_scripts/ui_demo.toml"; }
+std::string demo_script_path() { return ffd::scenario_dir() + "/ui_scripts/ui_demo.toml"; }
 
 bool display_present() {
   const char* x11 = std::getenv("DISPLAY");

@@ -54,6 +54,9 @@ SceneSpec read_scene_table(const toml::table& table, const std::string& origin, 
 
 // The default scene, which needs no file from the user: two Utah teapots dropped on each
 // other onto a floor (the paper's Fig. 7).
+// The folder with scenes/, meshes/, replays/ and ui_scripts/: <prefix>/share/ffdsim when
+// ffdsim runs installed, else the source tree's scenarios/.
+std::string scenario_dir();
 std::string default_scene_path();
 SceneSpec default_scene();
 
