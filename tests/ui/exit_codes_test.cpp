@@ -36,7 +36,7 @@ TEST_CASE("Exit codes: simulate", "[cli]") {
   check_exit("simulate " + kMinimal + " --steps 5 -q", 0, "");
   check_exit("simulate --steps 0", 1, "--steps: Value 0 not in range");
   check_exit("simulate " + kMinimal + " extra.toml", 1, "extra.toml");
-  check_exit("simulate --obj-every 5", 1, "--obj-every requires --out");
+  check_exit("simulate --obj-every 5", 1, "--surfaces-every requires --surfaces");
   check_exit("simulate missing.toml", 2, "missing.toml: cannot open scene file");
   check_exit("simulate " + kData + "bad_range.toml", 2, "bad_range.toml:");
   check_exit("simulate " + kDiverging + " --steps 5 -q", 3, "");

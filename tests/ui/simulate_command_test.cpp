@@ -77,10 +77,10 @@ TEST_CASE("simulate fails clearly on bad input", "[cli]") {
     CHECK(r.exit_code != 0);
     CHECK_THAT(r.output, Catch::Contains("--steps"));
   }
-  SECTION("--obj-every without --out") {
+  SECTION("--obj-every without --out (the older names of --surfaces-every and --surfaces)") {
     const Result r = run_ffdsim("simulate --obj-every 10");
-    CHECK(r.exit_code != 0);
-    CHECK_THAT(r.output, Catch::Contains("--out"));
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--surfaces-every requires --surfaces"));
   }
   SECTION("no subcommand") {
     CHECK(run_ffdsim("").exit_code != 0);

@@ -314,7 +314,7 @@ TEST_CASE("UI scripts: errors name the file, the line and the field", "[viewer]"
   CHECK(error_of("duration_ms = 100\n[[input]]\nat_ms = 50\nkey = \"p\"\n[[input]]\nat_ms = 10\nkey = \"p\"\n") ==
         "ui.toml:6:9: input[1].at_ms: inputs must be in time order");
   CHECK(error_of("duration_ms = 100\n[[input]]\nat_ms = 5\nmose = [1, 2]\n").find("ui.toml:4:1: input[0].mose: unknown key 'mose'; did you mean 'mouse'?") == 0);
-  CHECK(error_of("duration_ms = 100\n[[input]]\nat_ms = 5\n") == "ui.toml:2:1: input[0]: does nothing: give a cursor target, press, release, key or wheel");
+  CHECK(error_of("duration_ms = 100\n[[input]]\nat_ms = 5\n") == "ui.toml:2:1: input[0]: does nothing: give a cursor target, press, release, key, text or wheel");
   CHECK(error_of("duration_ms = 100\n[[input]]\nat_ms = 500\nkey = \"p\"\n") == "ui.toml:3:9: input[0].at_ms: is at or after the end of the run (duration_ms)");
 
   // A widget the viewer does not show is reported when the script reaches it.
