@@ -1169,10 +1169,10 @@ TEST_CASE("simulation.response picks the contact response, and an unknown one na
   CHECK_THROWS_WITH(parse(head + "\"springs\"" + tail),
                     "inline.toml:3:12: simulation.response: unknown response 'springs' (valid: \"paper\", \"solver\")");
   CHECK_THROWS_WITH(parse(head + "1" + tail), Catch::Matchers::Contains("simulation.response: expected a string"));
-  // rolling_resistance (the solver's): read, default 0.05, never negative.
+  // rolling_resistance (the solver's): read, default 0.2, never negative.
   const std::string rolling = "[simulation]\neffects = [\"planes\"]\nrolling_resistance = ";
-  CHECK(parse(rolling + "0.2" + tail).settings.rolling_resistance == 0.2);
-  CHECK(parse(head + "\"solver\"" + tail).settings.rolling_resistance == 0.05);
+  CHECK(parse(rolling + "0.35" + tail).settings.rolling_resistance == 0.35);
+  CHECK(parse(head + "\"solver\"" + tail).settings.rolling_resistance == 0.2);
   CHECK_THROWS_WITH(parse(rolling + "-0.1" + tail),
                     "inline.toml:3:22: simulation.rolling_resistance: must be >= 0 (got -0.1)");
 }

@@ -143,7 +143,7 @@ struct SimulationSettings {
   // Response "solver" only: rolling resistance, the most torque a contact resists rolling and
   // spinning with, as a share of its normal force times the object's radius of gyration
   // (contact_solver.cpp). Without it an object resting on a curved support rocks on it for ever.
-  double rolling_resistance = 0.05;
+  double rolling_resistance = 0.2;
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
