@@ -130,3 +130,20 @@ TEST_CASE("run exports its surfaces and series as it goes, and refuses a series 
   CHECK(r.exit_code == 1);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("replay: a series that cannot be written is an error, and the results and report are still there", "[cli]") {
+  const std::filesystem::path dir = test::fresh_temp_dir("exports_full");
+  std::filesystem::create_directories(dir);
+  std::filesystem::create_symlink("/dev/full", dir / "series.csv");  // every write fails: a full disk
+  const std::string report = (dir / "report.json").string();
+  const test::ProgramResult r = test::run_ffdsim("replay --fast --skip-latency " + kReplays + "poke_teapot.toml --series " +
+                                                 (dir / "series.csv").string() + " --report " + report);
+  INFO(r.output);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains((dir / "series.csv").string() + ": write failed"));
+  CHECK_THAT(r.output, Catch::Contains("passed: all"));  // the assertions were printed
+  std::ifstream in(report);
+  REQUIRE(in);
+  CHECK(nlohmann::json::parse(in).at("passed") == true);
+  std::filesystem::remove_all(dir);
+}

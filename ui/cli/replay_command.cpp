@@ -60,14 +60,6 @@ int run_replay_command(const ReplayOptions& o) {
   run.threads = thread_count(o.threads);
   run.exports = exports ? &*exports : nullptr;
   const ffd::ReplayResult result = ffd::run_replay(replay, run);
-  if (exports) {
-    exports->finish();
-    if (!exports->error().empty()) {
-      std::fprintf(stderr, "ffdsim: error: %s\n", exports->error().c_str());
-      return kExitBadInput;
-    }
-    if (!o.quiet) std::printf("%s\n", exports->summary().c_str());
-  }
   const std::string text = ffd::format_replay_result(replay.script, result);
   if (!o.quiet || !result.passed()) std::fputs(text.c_str(), result.passed() ? stdout : stderr);
   if (!result.passed() && replay.script.recorded && replay.script.recorded->ffdsim != ffd::ffdsim_version())
@@ -80,6 +72,15 @@ int run_replay_command(const ReplayOptions& o) {
       std::fprintf(stderr, "ffdsim: error: %s: cannot write the report\n", o.report_path.c_str());
       return kExitBadInput;
     }
+  }
+  // After the results and the report: a file the exports could not write loses neither.
+  if (exports) {
+    exports->finish();
+    if (!exports->error().empty()) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", exports->error().c_str());
+      return kExitBadInput;
+    }
+    if (!o.quiet) std::printf("%s\n", exports->summary().c_str());
   }
   if (!result.finite) {  // the run failed, whatever the assertions say
     std::fprintf(stderr, "ffdsim: error: %s: the simulation produced a non-finite value at step %llu\n", o.script.c_str(),

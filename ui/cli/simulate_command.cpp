@@ -53,9 +53,10 @@ double resident_bytes() {
 }
 
 // Before the first step of a large scene: what it holds in memory, about how long its steps
-// will take, and what makes it smaller. The step time is a rough cost model (ns per spring or
-// shape-matching member and per FFD AABB, measured on filled boxes of 10 k to 550 k nodes,
-// Intel Xeon, 2 threads); the progress bar gives the real rate once steps run.
+// will take, and what makes it smaller. The step time is a rough cost model (ns per spring,
+// shape-matching member or quarter volume constraint, and per FFD AABB, measured on filled
+// boxes of 10 k to 550 k nodes, Intel Xeon, 2 threads); the progress bar gives the real rate
+// once steps run.
 void estimate_large_scene(const ffd::Model& model, long long steps) {
   constexpr double kSecondsPerSpring = 35e-9, kSecondsPerBox = 200e-9;
   const double work = static_cast<double>(model.springs.size() + model.region_members.size() + 4 * model.tetrahedra.size());
@@ -136,10 +137,10 @@ int run_simulate(const SimulateOptions& o) {
       std::printf("threads %d, SIMD %s\n", pool.threads(), ffd::simd_target_name());
       print_summary(run, model, stats);
     }
-    return run.finite ? 0 : 3;
+    return run.finite ? kExitOk : kExitRuntime;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-    return 2;
+    return kExitBadInput;
   }
 }
 
