@@ -38,6 +38,10 @@ constexpr double kLodgedDepth = 0.0002;
 // them to 0.13 mm/s.
 constexpr double kSpinNoise = 1.0e-4;
 
+// A contact's friction below this share of its Coulomb limit held: the contact stuck (the
+// solve clamps a sliding contact's friction to the limit itself).
+constexpr double kStuck = 0.999;
+
 // A point carried by cell `cell` at local coordinates `local` (eq. 2).
 ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
   ContactSide side;
@@ -62,6 +66,16 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
   return side;
 }
 
+// The proxy's inverse mass as the contacts see it: its coupling is integrated by backward
+// Euler (interaction.cpp), so within a step it answers a push like a mass m + dt c + dt^2 k.
+// With the bare mass, a stiff coupling (10^7 N/m on 0.05 kg) held the proxy back at a box
+// pinned on the floor while the device went on: 2 x 10^5 N, then it tore through at 30 m/s.
+double probe_inv_mass(const Model& model, const State& state) {
+  const double dt = model.settings.dt;
+  return 1.0 / (model.settings.probe.mass + dt * model.settings.probe.coupling_damping +
+                dt * dt * state.params.probe_stiffness);
+}
+
 ContactSide probe_point() {
   ContactSide side;
   side.node.fill(kNoIndex);
@@ -83,7 +97,7 @@ struct Bodies {
   Vec3& v(Index n) const { return n == kProbeNode ? state.probe.v : state.v[n]; }
   const Vec3& x_prev(Index n) const { return n == kProbeNode ? scratch.probe_x_prev : scratch.x_prev[n]; }
   double inv_mass(Index n) const {
-    if (n == kProbeNode) return 1.0 / model.settings.probe.mass;
+    if (n == kProbeNode) return probe_inv_mass(model, state);
     return scratch.object_solving[model.node_object[n]] ? model.node_inv_mass[n] : 0.0;
   }
   Vec3 point(const ContactSide& s) const {
@@ -353,30 +367,97 @@ struct SideBody {
 SideBody side_body(const Model& model, const State& state, const Scratch& scratch, const ContactSide& s) {
   SideBody body;
   if (s.count == 0) return body;
-  if (s.cell == kNoIndex) return {state.probe.v, 1.0 / model.settings.probe.mass};
+  if (s.cell == kNoIndex) return {state.probe.v, probe_inv_mass(model, state)};
   body.v = mean_velocity(state, model.cell_nodes[s.cell]);
   body.inv_mass = scratch.object_solving[model.cell_object[s.cell]] ? model.cell_inv_mass[s.cell] : 0.0;
   return body;
 }
 
 void set_side_velocity(const Model& model, State& state, const ContactSide& s, const SideBody& body,
-                       const Vec3& v_ref, const Vec3& n, double beta, const Vec3& kick) {
+                       const Vec3& v_ref, const Vec3& n, double beta) {
   if (!(body.inv_mass > 0.0)) return;
   if (s.cell == kNoIndex) {
-    state.probe.v = respond_velocity(state.probe.v, v_ref, n, 1.0, beta) + kick;
+    state.probe.v = respond_velocity(state.probe.v, v_ref, n, 1.0, beta);
     return;
   }
-  for (Index i : model.cell_nodes[s.cell]) state.v[i] = respond_velocity(state.v[i], v_ref, n, 1.0, beta) + kick;
+  for (Index i : model.cell_nodes[s.cell]) state.v[i] = respond_velocity(state.v[i], v_ref, n, 1.0, beta);
 }
 
 // The velocities after the solve, contact by contact in list order, for each contact that
 // pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
-// v_ref, with the normal part taken to the pair's rebound: -(1 - alpha) of the approach the
+// v_ref, with the normal part stopped; then the rebound: -(1 - alpha) of the approach the
 // contact was found with (response.h), none for a resting contact. The tangential part keeps
 // 1 - beta. So alpha and beta mean what they mean in the paper, and a position correction of
 // the solve never leaves as metres per second (v = dx / dt of a millimetre is 1 m/s).
-void answer_velocities(const Model& model, State& state, const Scratch& scratch, double beta) {
+// Calls f(velocity, mass) once for each node of a cell in an active contact and for the probe
+// if it is in one; `stamp` (new for each call in a step) marks the nodes already visited.
+template <class F>
+void for_each_answered_node(const Model& model, State& state, Scratch& scratch, std::uint64_t stamp, F&& f) {
+  bool probe_seen = false;
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
+    for (const ContactSide* side : {&c.a, &c.b}) {
+      if (side->count == 0) continue;  // a plane
+      if (side->cell == kNoIndex) {
+        if (!probe_seen) f(state.probe.v, model.settings.probe.mass);
+        probe_seen = true;
+        continue;
+      }
+      for (Index n : model.cell_nodes[side->cell]) {
+        if (scratch.node_stamp[n] == stamp) continue;
+        scratch.node_stamp[n] = stamp;
+        f(state.v[n], model.node_mass[n]);
+      }
+    }
+  }
+}
+
+// The rebound of the contacts found approaching: each node of their cells, stopped by the
+// velocity pass, leaves along n at its side's share of -(1 - alpha) approach, times `scale`,
+// once per step (`stamp`) whatever the number of contacts its cells are in. Returns the
+// kinetic energy it adds as A scale + B scale^2 (J): {A, B} for scale 1.
+std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch, std::uint64_t stamp, double scale) {
   const double alpha = state.params.alpha;
+  std::array<double, 2> added{0.0, 0.0};
+  bool probe_rebounded = false;
+  auto kick = [&](Vec3& v, double mass, const Vec3& dv) {
+    added[0] += mass * v.dot(dv);
+    added[1] += 0.5 * mass * dv.squaredNorm();
+    v += dv;
+  };
+  auto rebound_side = [&](const ContactSide& s, const SideBody& body, const Vec3& dv) {
+    if (!(body.inv_mass > 0.0)) return;
+    if (s.cell == kNoIndex) {
+      if (!probe_rebounded) kick(state.probe.v, model.settings.probe.mass, dv);
+      probe_rebounded = true;
+      return;
+    }
+    for (Index n : model.cell_nodes[s.cell]) {
+      if (scratch.node_stamp[n] == stamp) continue;
+      scratch.node_stamp[n] = stamp;
+      kick(state.v[n], model.node_mass[n], dv);
+    }
+  };
+  for (Index i = 0; i < scratch.constraint_count; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0) || !(c.approach < -kRestingApproach)) continue;
+    const SideBody a = side_body(model, state, scratch, c.a), b = side_body(model, state, scratch, c.b);
+    const PositionShares share = position_shares(a.inv_mass, b.inv_mass);
+    const double bounce = -(1.0 - alpha) * c.approach * scale;  // m/s
+    rebound_side(c.a, a, -share.a * bounce * c.normal);
+    rebound_side(c.b, b, share.b * bounce * c.normal);
+  }
+  return added;
+}
+
+void answer_velocities(const Model& model, State& state, Scratch& scratch, double beta) {
+  const double alpha = state.params.alpha;
+  const bool rebounds = alpha < 1.0;
+  const std::uint64_t stamp = 4 * state.step;  // + 1 .. 4: the four visits below
+  double energy_before = 0.0;                  // J, of the nodes the contacts answer
+  auto add_energy = [](double& sum) { return [&sum](const Vec3& v, double m) { sum += 0.5 * m * v.squaredNorm(); }; };
+  if (rebounds) for_each_answered_node(model, state, scratch, stamp + 1, add_energy(energy_before));
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
     if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
@@ -386,10 +467,29 @@ void answer_velocities(const Model& model, State& state, const Scratch& scratch,
     // v_ref: the mass-weighted mean; a static side's velocity (zero) where there is one.
     Vec3 v_ref = a.inv_mass > 0.0 ? b.v : a.v;
     if (a.inv_mass > 0.0 && b.inv_mass > 0.0) v_ref = (a.v / a.inv_mass + b.v / b.inv_mass) / (1.0 / a.inv_mass + 1.0 / b.inv_mass);
-    const double bounce = c.approach < -kRestingApproach ? -(1.0 - alpha) * c.approach : 0.0;  // m/s, >= 0
-    set_side_velocity(model, state, c.a, a, v_ref, c.normal, beta, -share.a * bounce * c.normal);
-    set_side_velocity(model, state, c.b, b, v_ref, c.normal, beta, share.b * bounce * c.normal);
+    // A contact whose friction held inside the Coulomb cone in the solve sticks: static
+    // friction, its tangential motion stopped. One that slid keeps 1 - beta of it (eq. 8).
+    // Kept at 1 - beta, the sticking nodes under a box at rest swung sideways by 0.5 um
+    // every other step (0.12 mm/s RMS).
+    const bool stuck = beta > 0.0 && !c.lodged && c.friction.norm() < kStuck * beta * c.lambda;
+    set_side_velocity(model, state, c.a, a, v_ref, c.normal, stuck ? 1.0 : beta);
+    set_side_velocity(model, state, c.b, b, v_ref, c.normal, stuck ? 1.0 : beta);
   }
+  if (!rebounds) return;
+  // The stop and the rebound together never add kinetic energy to the nodes they answer: a
+  // cell's rebound is its pair's, but cells share nodes, and a node in several pairs is pulled
+  // several ways by the stop. Two spheres meeting head on at alpha = 0 left 0.8 % faster than
+  // they came until the rebound was bounded by what the stop took.
+  double energy_stopped = 0.0;
+  for_each_answered_node(model, state, scratch, stamp + 2, add_energy(energy_stopped));
+  const double allowed = std::max(0.0, energy_before - energy_stopped);  // J
+  const std::array<double, 2> added = rebound(model, state, scratch, stamp + 3, 1.0);
+  if (!(added[0] + added[1] > allowed)) return;
+  // The scale s in [0, 1] at which A s + B s^2 = allowed; the rebound is taken back to it.
+  const double A = added[0], B = added[1];
+  double s = 0.0;
+  if (B > 0.0) s = std::clamp((-A + std::sqrt(std::max(0.0, A * A + 4.0 * B * allowed))) / (2.0 * B), 0.0, 1.0);
+  rebound(model, state, scratch, stamp + 4, s - 1.0);
 }
 
 // The rigid part of an object's motion: centre and its velocity, inertia about it, spin (I^-1 L).
@@ -434,7 +534,10 @@ Vec3 never_faster(const Vec3& motion, const Vec3& change) {
 //   resistance (a contact alone cannot stop an object rolling on a curved support: the upper
 //   teapot rocked on the lower one's knob for seconds), turned about the contacts' load
 //   centre, so that the velocities the contacts left there stay (about its own centre the
-//   contact points slid and the upper teapot slid off the knob);
+//   contact points slid and the upper teapot slid off the knob). It stands for the grip of
+//   the contact patch, so a frictionless contact (beta = 0) has none: a frictionless ball
+//   resting 1 cm off centre on a box, its spin slowed about the contacts or about its own
+//   centre, pushed itself 2.5 cm and the box 3.6 cm sideways in 1 s;
 // - support damping: the object's velocity along its resting contacts' mean normal relative
 //   to its supports', taken away at alpha's share, by at most the contacts' normal force:
 //   alpha is the contact's damping, for a resting object as for an impact (the upper teapot
@@ -442,8 +545,8 @@ Vec3 never_faster(const Vec3& motion, const Vec3& change) {
 //   motion is its centre's).
 // Neither ever makes the object move or spin faster than it does. Everything is measured
 // before anything changes, so the objects' order does not matter.
-void damp_on_supports(const Model& model, State& state, Scratch& scratch) {
-  const double resistance = model.settings.rolling_resistance, alpha = state.params.alpha;
+void damp_on_supports(const Model& model, State& state, Scratch& scratch, double beta) {
+  const double resistance = beta > 0.0 ? model.settings.rolling_resistance : 0.0, alpha = state.params.alpha;
   if (!(resistance > 0.0) && !(alpha > 0.0)) return;
   const Bodies bodies{model, state, scratch};
   for (Scratch::ObjectMotion& s : scratch.object_motion) s.touched = false;
@@ -541,12 +644,12 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
     ProbeState& probe = state.probe;
     probe.v = (probe.x - scratch.probe_x_prev) / dt;
     answer_velocities(model, state, scratch, beta);
-    damp_on_supports(model, state, scratch);
+    damp_on_supports(model, state, scratch, beta);
     probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
                   model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
   } else {
     answer_velocities(model, state, scratch, beta);
-    damp_on_supports(model, state, scratch);
+    damp_on_supports(model, state, scratch, beta);
   }
   if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
 }

@@ -99,6 +99,7 @@ Scratch make_scratch(const Model& model) {
     s.object_answered.resize(model.objects.size());
   }
   s.x_prev.resize(model.node_count());
+  s.node_stamp.assign(model.node_count(), 0);
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());
   s.spring_inv_denominator.resize(model.springs.size());

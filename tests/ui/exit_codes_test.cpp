@@ -69,6 +69,14 @@ TEST_CASE("Exit codes: replay", "[cli]") {
   check_exit("replay --fast " + write("diverging.toml", kDiverging, ""), 3, "non-finite value at step");
   check_exit("replay --fast " + write("fail.toml", kData + "probe_and_grab.toml", "[assert.stability]\nspeed_max_m_s = 1e-9\n"), 4,
              "FAIL stability.speed_max_m_s");
+  // --response runs the script under the other response: two boxes resting on each other
+  // tremble under the paper's (13-15 mm/s RMS) and come to rest under the solver's.
+  const std::string rest = (dir / "rest.toml").string();
+  std::ofstream(rest) << "version = 1\nscene = \"" << kData << "probe_and_grab.toml\"\nduration_ms = 1000\n"
+                      << "[assert.motion]\nfrom_ms = 500\nrms_speed_max_m_s = 0.001\n";
+  check_exit("replay --fast --response paper " + rest, 4, "FAIL motion.rms_speed_max_m_s");
+  check_exit("replay --fast --response solver " + rest, 0, "under contact response solver");
+  check_exit("replay --fast --response other " + rest, 1, "--response");
   std::filesystem::remove_all(dir);
 }
 

@@ -58,6 +58,7 @@ struct ReplayOptions {
   bool quiet = false;
   bool scene_from_recording = false;  // a recording: its embedded scene text, not the scene file
   bool allow_changed = false;         // a recording: the files as they are now, even if changed
+  std::string response;               // empty: the scene's; "paper" or "solver" overrides it
   ExportArguments exports;
 };
 void register_replay(CLI::App& app, ReplayOptions& options);

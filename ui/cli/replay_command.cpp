@@ -28,6 +28,10 @@ void register_replay(CLI::App& app, ReplayOptions& o) {
                 "A recording: replay the scene and mesh files as they are now even where their content changed since "
                 "(the replay reports the first diverging step)")
       ->excludes(from_recording);
+  cmd->add_option("--response", o.response,
+                  "Run under this contact response instead of the scene's (paper, solver); not for a recording, "
+                  "which replays the response it was recorded with")
+      ->check(CLI::IsMember({"paper", "solver"}));
   add_threads_option(*cmd, o.threads);
   add_export_options(*cmd, o.exports);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only failures and errors");
@@ -41,6 +45,14 @@ int run_replay_command(const ReplayOptions& o) {
                                         : o.allow_changed      ? ffd::RecordedScene::AllowChanged
                                                                : ffd::RecordedScene::MustMatch;
     replay = ffd::load_replay_file(o.script, {}, recorded);
+    if (!o.response.empty()) {
+      if (replay.script.recorded) {
+        std::fprintf(stderr, "ffdsim: error: %s: --response: a recording replays the response it was recorded with\n",
+                     o.script.c_str());
+        return kExitUsage;
+      }
+      ffd::response_from_name(o.response, replay.model.settings.response);  // checked by the option
+    }
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (o.exports.options().any()) {
       std::vector<std::string> sources;
@@ -52,6 +64,8 @@ int run_replay_command(const ReplayOptions& o) {
     return kExitBadInput;
   }
   for (const std::string& warning : replay.script.warnings) std::fprintf(stderr, "ffdsim: warning: %s\n", warning.c_str());
+  if (!o.response.empty() && !o.quiet)
+    std::printf("%s: under contact response %s (--response)\n", o.script.c_str(), o.response.c_str());
   ffd::ReplayRunOptions run;
   run.pacing = o.fast ? ffd::Pacing::Fast : ffd::Pacing::RealTime;
   run.period_ns = static_cast<std::int64_t>(o.period_us * 1000.0);

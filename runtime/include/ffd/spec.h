@@ -143,6 +143,7 @@ struct SimulationSettings {
   // Response "solver" only: rolling resistance, the most torque a contact resists rolling and
   // spinning with, as a share of its normal force times the object's radius of gyration
   // (contact_solver.cpp). Without it an object resting on a curved support rocks on it for ever.
+  // Off where beta = 0: a frictionless contact has no grip.
   double rolling_resistance = 0.2;
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
   ProbeSettings probe;                   // used with the "probe" effect

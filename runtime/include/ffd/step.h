@@ -234,6 +234,9 @@ struct Scratch {
     bool touched = false;
   };
   std::vector<ObjectMotion> object_motion;
+  // Response "solver": marks the nodes a pass over the contacts has visited (contact_solver.cpp);
+  // a mark is new for every pass, so that a node shared by several contacts' cells is visited once.
+  std::vector<std::uint64_t> node_stamp;
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;
