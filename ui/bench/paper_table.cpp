@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "ffd/command.h"
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
 #include "ffd/worker_pool.h"
@@ -76,6 +77,14 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
   const ffd::Model& model = *shared_model;
   const std::uint64_t total = result.warmup_steps + result.measured_steps;
   ffd::State state = ffd::initial_state(model);
+  {  // the response, switched as a user switches it: the live command
+    const ffd::State initial = state;
+    ffd::Command command;
+    command.kind = ffd::CommandKind::SetResponse;
+    command.value = static_cast<double>(result.response);
+    ffd::apply_command(model, initial, state, command);
+  }
+  const bool record_boxes_now = record && result.response == ffd::ContactResponse::Paper;
   ffd::Scratch scratch = ffd::make_scratch(model);
   ffd::WorkerPool pool(threads);
   ffd::attach_pool(model, scratch, pool);
@@ -106,13 +115,15 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
         result.max_penetration_m = std::max(result.max_penetration_m, report.max_box_penetration_m);
       }
     }
-    for (int m = 0; m < 3 && record; ++m) {
+    for (int m = 0; m < 3 && record_boxes_now; ++m) {
       if (i != record_at[m] || !model.collides) continue;
       ffd::update_all_boxes(model, state, record_scratch);
       result.box_sets.push_back(record_boxes(shared_model, record_scratch, result.scenario.key, moment_names[m], state.step));
     }
     if (i % report_every == 0 || i == total)
-      progress(result.scenario.key + ": " + label + (i <= result.warmup_steps ? ", warm-up" : ", measuring"), i, total);
+      progress(result.scenario.key + " (" + ffd::response_name(result.response) + "): " + label +
+                   (i <= result.warmup_steps ? ", warm-up" : ", measuring"),
+               i, total);
   }
   ThreadRun run;
   run.threads = pool.threads();
@@ -130,9 +141,10 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
 }  // namespace
 
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
-                              const Progress& progress) {
+                              const Progress& progress, ffd::ContactResponse response) {
   ScenarioResult result;
   result.scenario = scenario;
+  result.response = response;
   result.warmup_steps = quick ? scenario.quick_warmup_steps : scenario.warmup_steps;
   result.measured_steps = quick ? scenario.quick_measured_steps : scenario.measured_steps;
 
@@ -157,7 +169,7 @@ ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scena
   result.single = run_scenario(shared_model, result, 1, true, progress, "1 thread");
   result.parallel = run_scenario(shared_model, result, threads, false, progress, std::to_string(threads) + " threads");
   if (result.parallel.state_hash != result.single.state_hash)
-    throw std::runtime_error(scenario.key + ": the state after " + std::to_string(result.warmup_steps + result.measured_steps) +
+    throw std::runtime_error(scenario.key + " (response " + ffd::response_name(response) + "): the state after " + std::to_string(result.warmup_steps + result.measured_steps) +
                              " steps differs between 1 and " + std::to_string(threads) + " threads (" +
                              result.single.state_hash + " and " + result.parallel.state_hash + ")");
   result.collision_mean_ms = result.single.collision_mean_ms;
@@ -192,13 +204,14 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
   s << "Machine: " << cpu << ". Paper: Pentium D 3.0 GHz, 2 GB RAM (Table 1, as printed).";
   if (quick) s << " **Quick run** (`--quick`: short windows, figures indicative only).";
   s << "\n\n";
-  s << "| scenario | triangles (paper / ours) | FFD cells (paper / ours) | collision ms/step: paper | ours p99, 1 / "
+  s << "| scenario | response | triangles (paper / ours) | FFD cells (paper / ours) | collision ms/step: paper | ours p99, 1 / "
     << threads << " threads | target p99 | whole step ms p99, 1 / " << threads
     << " threads | speed-up | target p99 | contacts/step: mean / max |\n";
-  s << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  s << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   const auto met = [](double value, double target) { return value <= target ? "" : " ✗"; };
   for (const ScenarioResult& r : results) {
-    s << "| " << r.scenario.key << " | " << thousands(r.scenario.paper.triangles) << " / " << thousands(r.triangles)
+    s << "| " << r.scenario.key << " | " << ffd::response_name(r.response) << " | " << thousands(r.scenario.paper.triangles)
+      << " / " << thousands(r.triangles)
       << " | " << thousands(r.scenario.paper.cells) << " / " << thousands(r.cells) << " | "
       << fixed(r.scenario.paper.collision_ms, r.scenario.paper.collision_ms < 10 ? 1 : 0) << " | "
       << fixed(r.single.collision_p99_ms, 3) << " / " << fixed(r.parallel.collision_p99_ms, 3)
@@ -211,26 +224,33 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
   }
   s << "\nCollision handling = FFD AABB update + broad phase + narrow phase with its responses + planes, per step, "
        "over the measured steps after the warm-up (";
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const ScenarioResult& r = results[i];
-    s << (i ? "; " : "") << r.scenario.key << " " << thousands(static_cast<double>(r.warmup_steps)) << " + "
+  std::string listed;
+  for (const ScenarioResult& r : results) {
+    if (listed.find(" " + r.scenario.key + " ") != std::string::npos) continue;  // once per scenario
+    s << (listed.empty() ? "" : "; ") << r.scenario.key << " " << thousands(static_cast<double>(r.warmup_steps)) << " + "
       << thousands(static_cast<double>(r.measured_steps));
+    listed += " " + r.scenario.key + " ";
   }
   s << " steps of 1 ms). The whole step adds the lattice dynamics (mass-spring, XPBD). Each scenario runs on 1 thread, "
        "then on "
     << threads
     << " (the same final state, checked); speed-up = whole-step p99 on 1 thread / on " << threads
-    << ". ✗: above the target. The paper's bunny row (five bunnies) stands beside both spring variants.\n\n";
+    << ". ✗: above the target. The paper's bunny row (five bunnies) stands beside both spring variants. "
+       "Response: how contacts are answered ([Two contact responses](#two-contact-responses)); collision handling "
+       "is detection alone under `solver`, whose contacts are solved with the springs (in the whole step).\n\n";
   s << "Per element, 1 thread (mean over the measured steps; targets: a spring projection ≤ 1.5 ns, an FFD AABB "
        "update ≤ 15 ns):\n\n";
   s << "| scenario | springs | spring projections/step | ns per spring projection | FFD AABBs | ns per FFD AABB update "
        "|\n|---|---:|---:|---:|---:|---:|\n";
-  for (const ScenarioResult& r : results)
+  for (const ScenarioResult& r : results) {
+    if (r.response != ffd::ContactResponse::Paper) continue;
     s << "| " << r.scenario.key << " | " << thousands(static_cast<double>(r.springs)) << " | "
       << thousands(static_cast<double>(r.spring_projections)) << " | " << fixed(r.ns_per_spring_projection, 2)
       << met(r.ns_per_spring_projection, 1.5) << " | " << thousands(static_cast<double>(r.boxes)) << " | "
       << fixed(r.ns_per_box_update, 1) << met(r.ns_per_box_update, 15.0) << " |\n";
-  s << "\nA spring projection: the dynamics stage (prediction, projections, velocities) over springs × iterations. "
+  }
+  s << "\nUnder the response `paper` (under `solver` the springs are solved with the contacts). A spring projection: "
+       "the dynamics stage (prediction, projections, velocities) over springs × iterations. "
        "An FFD AABB update: eq. 2 for its 9 nodes and its world AABB.\n";
   return s.str();
 }
@@ -247,6 +267,7 @@ nlohmann::json to_json(const std::vector<ScenarioResult>& results) {
   nlohmann::json rows = nlohmann::json::array();
   for (const ScenarioResult& r : results) {
     rows.push_back({{"scenario", r.scenario.key},
+                    {"response", ffd::response_name(r.response)},
                     {"scene_file", r.scenario.scene_file},
                     {"paper", {{"name", r.scenario.paper.name},
                                {"triangles", r.scenario.paper.triangles},

@@ -46,6 +46,7 @@ struct ThreadRun {
 
 struct ScenarioResult {
   Scenario scenario;
+  ffd::ContactResponse response = ffd::ContactResponse::Paper;  // every step answered so (spec.h)
   std::uint64_t warmup_steps = 0, measured_steps = 0;
   std::size_t objects = 0, triangles = 0, cells = 0, boxes = 0, nodes = 0, springs = 0, spring_projections = 0;
   double load_s = 0;                          // scene file to compiled model, s
@@ -69,12 +70,13 @@ struct ScenarioResult {
 // Progress: what runs ("alphabets: warm-up"), steps done and steps in all.
 using Progress = std::function<void(const std::string& what, std::uint64_t done, std::uint64_t total)>;
 
-// Loads, warms up and measures one scenario. Box sets are recorded at 15 % and 55 % of the
-// run and at its end. Throws on a bad scene file (the message names it).
+// Loads, warms up and measures one scenario under a contact response (switched as the live
+// command switches it). Box sets are recorded at 15 % and 55 % of the run and at its end,
+// under the paper's response. Throws on a bad scene file (the message names it).
 // `threads`: the second run's thread count (the first runs on 1). Throws if the two runs end
 // in different states (determinism across thread counts is part of what is measured).
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
-                              const Progress& progress);
+                              const Progress& progress, ffd::ContactResponse response = ffd::ContactResponse::Paper);
 
 // Figures shared by the bench tables.
 double percentile(std::vector<double> values, double p);  // nearest rank, of a copy

@@ -96,6 +96,7 @@ struct BenchOptions {
   std::string readme;             // Markdown file whose bench sections are replaced
   int repetitions = 20;
   int threads = 0;                // the second thread count of every row (the first is 1)
+  std::vector<std::string> responses = {"paper", "solver"};  // contact responses, a row each (spec.h)
   bool quiet = false;
 };
 void register_bench(CLI::App& app, BenchOptions& options);
