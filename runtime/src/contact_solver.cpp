@@ -392,61 +392,68 @@ void set_side_velocity(const Model& model, State& state, const ContactSide& s, c
   for (Index i : model.cell_nodes[s.cell]) state.v[i] = respond_velocity(state.v[i], v_ref, n, 1.0, beta);
 }
 
-// The velocities after the solve, contact by contact in list order, for each contact that
-// pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
-// v_ref, with the normal part stopped; then the rebound: -(1 - alpha) of the approach the
-// contact was found with (response.h), none for a resting contact. The tangential part keeps
-// 1 - beta. So alpha and beta mean what they mean in the paper, and a position correction of
-// the solve never leaves as metres per second (v = dx / dt of a millimetre is 1 m/s).
-// Calls f(velocity, mass) once for each node of a cell in an active contact and for the probe
-// if it is in one; `stamp` (new for each call in a step) marks the nodes already visited.
-template <class F>
-void for_each_answered_node(const Model& model, State& state, Scratch& scratch, std::uint64_t stamp, F&& f) {
-  bool probe_seen = false;
+// One pass over the nodes of contacts' cells (and the probe) that visits each node once: a
+// node shared by several contacts' cells is visited for the first of them only. Each pass
+// takes a fresh mark (Scratch::node_stamp_epoch), so marks left by earlier passes, steps or
+// runs on the same Scratch never match.
+class NodeVisit {
+ public:
+  NodeVisit(const Model& model, State& state, Scratch& scratch)
+      : model_(model), state_(state), scratch_(scratch), mark_(++scratch.node_stamp_epoch) {}
+  // Calls f(velocity, mass) for each node of side s not visited yet in this pass.
+  template <class F>
+  void side(const ContactSide& s, F&& f) {
+    if (s.count == 0) return;  // a plane
+    if (s.cell == kNoIndex) {
+      if (!probe_seen_) f(state_.probe.v, model_.settings.probe.mass);
+      probe_seen_ = true;
+      return;
+    }
+    for (Index n : model_.cell_nodes[s.cell]) {
+      if (scratch_.node_stamp[n] == mark_) continue;
+      scratch_.node_stamp[n] = mark_;
+      f(state_.v[n], model_.node_mass[n]);
+    }
+  }
+
+ private:
+  const Model& model_;
+  State& state_;
+  Scratch& scratch_;
+  std::uint64_t mark_;
+  bool probe_seen_ = false;
+};
+
+// The kinetic energy (J) of the nodes of the cells in active contacts, and of the probe if it
+// is in one, each counted once.
+double answered_energy(const Model& model, State& state, Scratch& scratch) {
+  double energy = 0.0;
+  NodeVisit visit(model, state, scratch);
+  const auto add = [&energy](const Vec3& v, double m) { energy += 0.5 * m * v.squaredNorm(); };
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
     if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
-    for (const ContactSide* side : {&c.a, &c.b}) {
-      if (side->count == 0) continue;  // a plane
-      if (side->cell == kNoIndex) {
-        if (!probe_seen) f(state.probe.v, model.settings.probe.mass);
-        probe_seen = true;
-        continue;
-      }
-      for (Index n : model.cell_nodes[side->cell]) {
-        if (scratch.node_stamp[n] == stamp) continue;
-        scratch.node_stamp[n] = stamp;
-        f(state.v[n], model.node_mass[n]);
-      }
-    }
+    visit.side(c.a, add);
+    visit.side(c.b, add);
   }
+  return energy;
 }
 
 // The rebound of the contacts found approaching: each node of their cells, stopped by the
 // velocity pass, leaves along n at its side's share of -(1 - alpha) approach, times `scale`,
-// once per step (`stamp`) whatever the number of contacts its cells are in. Returns the
-// kinetic energy it adds as A scale + B scale^2 (J): {A, B} for scale 1.
-std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch, std::uint64_t stamp, double scale) {
+// once whatever the number of contacts its cells are in. Returns the kinetic energy it adds
+// as A scale + B scale^2 (J): {A, B} for scale 1.
+std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch, double scale) {
   const double alpha = state.params.alpha;
   std::array<double, 2> added{0.0, 0.0};
-  bool probe_rebounded = false;
-  auto kick = [&](Vec3& v, double mass, const Vec3& dv) {
-    added[0] += mass * v.dot(dv);
-    added[1] += 0.5 * mass * dv.squaredNorm();
-    v += dv;
-  };
-  auto rebound_side = [&](const ContactSide& s, const SideBody& body, const Vec3& dv) {
-    if (!(body.inv_mass > 0.0)) return;
-    if (s.cell == kNoIndex) {
-      if (!probe_rebounded) kick(state.probe.v, model.settings.probe.mass, dv);
-      probe_rebounded = true;
-      return;
-    }
-    for (Index n : model.cell_nodes[s.cell]) {
-      if (scratch.node_stamp[n] == stamp) continue;
-      scratch.node_stamp[n] = stamp;
-      kick(state.v[n], model.node_mass[n], dv);
-    }
+  NodeVisit visit(model, state, scratch);
+  auto kick = [&](const ContactSide& s, const SideBody& body, const Vec3& dv) {
+    if (!(body.inv_mass > 0.0)) return;  // static: a plane, a sleeper
+    visit.side(s, [&](Vec3& v, double mass) {
+      added[0] += mass * v.dot(dv);
+      added[1] += 0.5 * mass * dv.squaredNorm();
+      v += dv;
+    });
   };
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
@@ -454,19 +461,21 @@ std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch
     const SideBody a = side_body(model, state, scratch, c.a), b = side_body(model, state, scratch, c.b);
     const PositionShares share = position_shares(a.inv_mass, b.inv_mass);
     const double bounce = -(1.0 - alpha) * c.approach * scale;  // m/s
-    rebound_side(c.a, a, -share.a * bounce * c.normal);
-    rebound_side(c.b, b, share.b * bounce * c.normal);
+    kick(c.a, a, -share.a * bounce * c.normal);
+    kick(c.b, b, share.b * bounce * c.normal);
   }
   return added;
 }
 
+// The velocities after the solve, contact by contact in list order, for each contact that
+// pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
+// v_ref, with the normal part stopped; then the rebound: -(1 - alpha) of the approach the
+// contact was found with (response.h), none for a resting contact. The tangential part keeps
+// 1 - beta. So alpha and beta mean what they mean in the paper, and a position correction of
+// the solve never leaves as metres per second (v = dx / dt of a millimetre is 1 m/s).
 void answer_velocities(const Model& model, State& state, Scratch& scratch, double beta) {
-  const double alpha = state.params.alpha;
-  const bool rebounds = alpha < 1.0;
-  const std::uint64_t stamp = 4 * state.step;  // + 1 .. 4: the four visits below
-  double energy_before = 0.0;                  // J, of the nodes the contacts answer
-  auto add_energy = [](double& sum) { return [&sum](const Vec3& v, double m) { sum += 0.5 * m * v.squaredNorm(); }; };
-  if (rebounds) for_each_answered_node(model, state, scratch, stamp + 1, add_energy(energy_before));
+  const bool rebounds = state.params.alpha < 1.0;
+  const double energy_before = rebounds ? answered_energy(model, state, scratch) : 0.0;  // J
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
     if (!(c.lambda > 0.0) || !(c.inv_mass > 0.0)) continue;
@@ -489,16 +498,14 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
   // cell's rebound is its pair's, but cells share nodes, and a node in several pairs is pulled
   // several ways by the stop. Two spheres meeting head on at alpha = 0 left 0.8 % faster than
   // they came until the rebound was bounded by what the stop took.
-  double energy_stopped = 0.0;
-  for_each_answered_node(model, state, scratch, stamp + 2, add_energy(energy_stopped));
-  const double allowed = std::max(0.0, energy_before - energy_stopped);  // J
-  const std::array<double, 2> added = rebound(model, state, scratch, stamp + 3, 1.0);
+  const double allowed = std::max(0.0, energy_before - answered_energy(model, state, scratch));  // J
+  const std::array<double, 2> added = rebound(model, state, scratch, 1.0);
   if (!(added[0] + added[1] > allowed)) return;
   // The scale s in [0, 1] at which A s + B s^2 = allowed; the rebound is taken back to it.
   const double A = added[0], B = added[1];
   double s = 0.0;
   if (B > 0.0) s = std::clamp((-A + std::sqrt(std::max(0.0, A * A + 4.0 * B * allowed))) / (2.0 * B), 0.0, 1.0);
-  rebound(model, state, scratch, stamp + 4, s - 1.0);
+  rebound(model, state, scratch, s - 1.0);
 }
 
 // The rigid part of an object's motion: centre and its velocity, inertia about it, spin (I^-1 L).

@@ -235,8 +235,10 @@ struct Scratch {
   };
   std::vector<ObjectMotion> object_motion;
   // Response "solver": marks the nodes a pass over the contacts has visited (contact_solver.cpp);
-  // a mark is new for every pass, so that a node shared by several contacts' cells is visited once.
+  // each pass takes a new mark (++node_stamp_epoch), so that a node shared by several
+  // contacts' cells is visited once, whatever earlier passes left.
   std::vector<std::uint64_t> node_stamp;
+  std::uint64_t node_stamp_epoch = 0;
 };
 
 inline constexpr std::size_t kContactCapacity = 4096;
