@@ -440,8 +440,10 @@ TEST_CASE("ffdsim run --device with the device simulator: the force rises and fa
   CHECK(mean_force(1300, 1600) == Approx(3.35).epsilon(0.05));
   CHECK(mean_force(2200, 2400) < 0.05);
   // The round trip, device send to force received, is measured (the README states it); a
-  // bound here only catches a broken link, not a slow machine.
-  CHECK(sim.at("round_trip_us").at("samples").get<std::uint64_t>() > 1000);
+  // bound here only catches a broken link, not a slow machine. A broken link answers no sample;
+  // a physics thread slower than real time answers fewer, as each step answers only the newest
+  // (785 of 2147 under ASan beside another test on 2 cores, 1816 in Release).
+  CHECK(sim.at("round_trip_us").at("samples").get<std::uint64_t>() > 100);
   CHECK(sim.at("round_trip_us").at("p99").get<double>() < 50'000.0);
   // The session replays bit for bit without the device.
   const ::test::ProgramResult replay = ::test::run_ffdsim("replay --fast " + (dir / "session.toml").string());
