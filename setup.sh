@@ -20,6 +20,8 @@ packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplus
           libfreetype-dev fonts-dejavu-core libstb-dev xvfb xauth
           # FCL: the broad-phase race in ffdsim bench; gnuplot: the plot of ffdsim accuracy
           libfcl-dev gnuplot-nox
+          # CGAL: exact triangle-triangle tests for the surface-intersection measure
+          libcgal-dev
           # the Python reference bridge of the device link (ui/device/bridges), run by the tests
           python3)
 missing=()

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ffd/measure.h"
+#include "ffd/scene_loader.h"
 #include "support/test_scenes.h"
 
 using namespace ffd;
@@ -80,7 +81,11 @@ TEST_CASE("Accuracy table: each response gets its rows and its own comparison li
     r.collision_p50_ms = collision_ms;
     return r;
   };
-  const std::vector<ffdbench::AccuracyRun> runs = {run(Accuracy::CentreOfMass, ContactResponse::Paper, 0.3),
+  ffdbench::AccuracyRun crossed = run(Accuracy::CentreOfMass, ContactResponse::Paper, 0.3);
+  crossed.intersections_mean = 61.4;
+  crossed.intersections_max = 80;
+  crossed.intersecting_share = 0.5;
+  const std::vector<ffdbench::AccuracyRun> runs = {crossed,
                                                    run(Accuracy::Exact, ContactResponse::Paper, 0.9),
                                                    run(Accuracy::CentreOfMass, ContactResponse::Solver, 0.2),
                                                    run(Accuracy::Exact, ContactResponse::Solver, 1.0)};
@@ -92,4 +97,23 @@ TEST_CASE("Accuracy table: each response gets its rows and its own comparison li
   CHECK_THAT(table, Catch::Contains("Level 2 (the paper's) against level 5 (exact) (response solver): 5.0x cheaper per step"));
   const nlohmann::json json = ffdbench::to_json(runs);
   CHECK(json[2]["response"] == "solver");
+  // The intersection columns: mean, max and the share of samples with any.
+  CHECK_THAT(table, Catch::Contains("intersecting pairs mean | max | samples with any |"));
+  CHECK_THAT(table, Catch::Contains("| 61 | 80 | 50 % |"));
+  CHECK_THAT(table, Catch::Contains("| 0 | 0 | 0 % |"));
+  CHECK(json[0]["intersections_max"] == 80);
+  CHECK(json[0]["intersecting_share"] == 0.5);
+}
+
+TEST_CASE("Accuracy run: the teapots at level 2 under the paper's response cross each other's surfaces",
+          "[bench][intersections]") {
+  const ffd::Model model = ffd::test::compile_quietly(
+      ffd::load_scene_file(std::string(FFDSIM_SCENARIO_DIR) + "/scenes/two_teapots.toml"));
+  const ffdbench::AccuracyRun r = ffdbench::run_accuracy(model, "teapots", Accuracy::CentreOfMass, 1500, 250,
+                                                         [](const std::string&, std::uint64_t, std::uint64_t) {});
+  // Samples at 1000, 1250 and 1500 ms: the upper teapot rests on the lower one, and the surfaces
+  // cross there (the vertex measure sees 1.4 mm of it).
+  CHECK(r.samples == 3);
+  CHECK(r.intersections_max > 0);
+  CHECK(r.intersecting_share == 1.0);
 }

@@ -10,6 +10,7 @@
 #include "ffd/command.h"
 #include "ffd/measure.h"
 #include "ffd/step.h"
+#include "ffd/surface_intersections.h"
 
 namespace ffdbench {
 
@@ -63,7 +64,8 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
   ffd::WorkerPool pool(threads);
   ffd::attach_pool(model, scratch, pool);
   ffd::StepReport report;
-  std::vector<double> collision_ms, step_ms, gaps, penetrations, penetrating;
+  std::vector<double> collision_ms, step_ms, gaps, penetrations, penetrating, intersections;
+  const ffd::SurfaceIntersections crossings(model);  // each surface's rest-shape pairs, found once
   collision_ms.reserve(steps);
   step_ms.reserve(steps);
   const std::string what = scene + ": level " + std::to_string(static_cast<int>(level)) + ", " + ffd::response_name(response);
@@ -83,6 +85,9 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
       penetrations.push_back(contacts.max_penetration_m * 1e3);
       penetrating.push_back(static_cast<double>(contacts.penetrating_vertices));
       run.penetrating_vertices_max = std::max(run.penetrating_vertices_max, contacts.penetrating_vertices);
+      const std::size_t pairs = crossings.count(state).total();
+      intersections.push_back(static_cast<double>(pairs));
+      run.intersections_max = std::max(run.intersections_max, pairs);
     }
     if (i % report_every == 0 || i == steps) progress(what, i, steps);
   }
@@ -96,6 +101,12 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
   run.penetration_mean_mm = mean(penetrations);
   run.penetration_max_mm = penetrations.empty() ? 0.0 : *std::max_element(penetrations.begin(), penetrations.end());
   run.penetrating_vertices_mean = mean(penetrating);
+  run.intersections_mean = mean(intersections);
+  run.intersecting_share = intersections.empty()
+                               ? 0.0
+                               : static_cast<double>(std::count_if(intersections.begin(), intersections.end(),
+                                                                   [](double n) { return n > 0.0; })) /
+                                     static_cast<double>(intersections.size());
   return run;
 }
 
@@ -126,14 +137,16 @@ std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::s
        "per step. Gap, penetration and penetrating vertices are measured on the exact embedded surfaces every 50 ms "
        "over the second half of the run. Gap: the widest gap between an object at rest (RMS speed of its lattice "
        "nodes below 5 cm/s) and the surface or floor it rests on; penetration: the deepest pair; penetrating vertices: "
-       "summed over the pairs. Mean and max over the samples. Response: how the contacts were answered (paper: at "
+       "summed over the pairs; intersecting pairs: triangle pairs of the surfaces that cross (between objects and "
+       "within one, each surface's rest-shape crossings left out; exact predicates), with the share of samples that "
+       "have any. Mean and max over the samples. Response: how the contacts were answered (paper: at "
        "once by eq. 7-9; solver: as constraints with the springs, whose time is then in the step, not in the "
        "collision column).\n\n";
   for (const std::string& scene : scenes_of(runs)) {
     s << "**" << scene << "**\n\n"
       << "| level | response | collision ms p50 | p99 | step ms p50 | gap mm mean | max | penetration mm mean | max | "
-         "penetrating vertices mean | max |\n"
-      << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+         "penetrating vertices mean | max | intersecting pairs mean | max | samples with any |\n"
+      << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const AccuracyRun& r : runs) {
       if (r.scene != scene) continue;
       s << "| " << static_cast<int>(r.level) << " " << ffd::accuracy_name(r.level) << (r.finite ? "" : " (NOT FINITE)")
@@ -141,7 +154,9 @@ std::string markdown_accuracy(const std::vector<AccuracyRun>& runs, const std::s
         << fixed(r.step_p50_ms, 2) << " | " << (r.rest_samples ? fixed(r.gap_mean_mm, 2) : "none at rest") << " | "
         << (r.rest_samples ? fixed(r.gap_max_mm, 2) : "-") << " | "
         << fixed(r.penetration_mean_mm, 2) << " | " << fixed(r.penetration_max_mm, 2) << " | "
-        << fixed(r.penetrating_vertices_mean, 0) << " | " << r.penetrating_vertices_max << " |\n";
+        << fixed(r.penetrating_vertices_mean, 0) << " | " << r.penetrating_vertices_max << " | "
+        << fixed(r.intersections_mean, 0) << " | " << r.intersections_max << " | "
+        << fixed(100.0 * r.intersecting_share, 0) << " % |\n";
     }
     for (const ffd::ContactResponse response : {ffd::ContactResponse::Paper, ffd::ContactResponse::Solver}) {
       // Under the response "paper" the lines read as they always did; under "solver" they say so.
@@ -187,6 +202,9 @@ nlohmann::json to_json(const std::vector<AccuracyRun>& runs) {
                    {"penetration_max_mm", r.penetration_max_mm},
                    {"penetrating_vertices_mean", r.penetrating_vertices_mean},
                    {"penetrating_vertices_max", r.penetrating_vertices_max},
+                   {"intersections_mean", r.intersections_mean},
+                   {"intersections_max", r.intersections_max},
+                   {"intersecting_share", r.intersecting_share},
                    {"finite", r.finite}});
   }
   return out;

@@ -2,7 +2,8 @@
 // What accuracy costs in time: a scene run at every accuracy level (spec.h, Accuracy) from
 // the same start, with the collision time per step from the step's own stage timers and the
 // contact accuracy measured on the exact embedded surfaces outside the timed path (gap
-// between surfaces at rest on each other, penetration, penetrating vertices).
+// between surfaces at rest on each other, penetration, penetrating vertices, intersecting
+// triangle pairs).
 // `ffdsim accuracy` prints the table and plots accuracy against time per step.
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
@@ -31,6 +32,12 @@ struct AccuracyRun {
   double penetration_mean_mm = 0, penetration_max_mm = 0;
   double penetrating_vertices_mean = 0;
   std::size_t penetrating_vertices_max = 0;
+  // Intersecting triangle pairs of the surfaces (surface_intersections.h: between objects and
+  // within one, rest-shape pairs left out) over the same samples, and the share of samples
+  // with any: the crossings that vertex depths miss (edge through edge).
+  double intersections_mean = 0;
+  std::size_t intersections_max = 0;
+  double intersecting_share = 0;
   bool finite = true;
 };
 

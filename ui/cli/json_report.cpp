@@ -22,6 +22,9 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   for (const ffd::SurfaceContact& c : run.contacts.contacts)
     contacts.push_back({{"a", c.a}, {"b", c.b}, {"penetration_m", c.penetration_m}, {"gap_m", c.gap_m}});
   report["contacts"] = contacts;
+  report["surface_intersections"] = {{"between_objects", run.intersections.between},
+                                     {"within_objects", run.intersections.within},
+                                     {"rest_pairs_left_out", run.rest_intersections}};
   report["max_box_penetration_m"] = stats.max_box_penetration_m();
   report["hash_overflow"] = stats.any_overflow();
   report["energy"] = {{"kinetic_j", run.energy.kinetic},

@@ -5,6 +5,7 @@
 
 #include "ffd/measure.h"
 #include "ffd/step_statistics.h"
+#include "ffd/surface_intersections.h"
 
 namespace ffdsim {
 
@@ -15,6 +16,10 @@ struct RunSummary {
   std::uint64_t state_hash = 0;
   bool finite = true;
   ffd::SurfaceContactReport contacts;
+  // Intersecting triangle pairs of the surfaces at the end, each surface's rest-shape pairs
+  // left out (surface_intersections.h).
+  ffd::IntersectionCount intersections;
+  std::size_t rest_intersections = 0;
   ffd::Energy energy;
 };
 

@@ -31,6 +31,8 @@ void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::St
   for (const ffd::SurfaceContact& c : run.contacts.contacts)
     std::printf("  %-20s %-20s penetration %8.3f mm  gap %8.3f mm\n", c.a.c_str(), c.b.c_str(), c.penetration_m * 1e3,
                 c.gap_m * 1e3);
+  std::printf("surface intersections: %zu triangle pairs between objects, %zu within one (%zu rest-shape pairs left out)\n",
+              run.intersections.between, run.intersections.within, run.rest_intersections);
   std::printf("%-14s %9s %9s %9s %9s\n", "stage", "mean us", "p50 us", "p99 us", "max us");
   for (ffd::Stage stage : model.pipeline) {
     const ffd::TimeSummary t = stats.stage_time(stage);
@@ -126,7 +128,12 @@ int run_simulate(const SimulateOptions& o) {
     run.state_hash = ffd::state_hash(state);
     run.finite = stats.all_finite();
     run.energy = ffd::compute_energy(model, state);
-    if (run.finite) run.contacts = ffd::measure_surface_contacts(model, state);
+    if (run.finite) {
+      run.contacts = ffd::measure_surface_contacts(model, state);
+      const ffd::SurfaceIntersections intersections(model);
+      run.intersections = intersections.count(state);
+      run.rest_intersections = intersections.rest_pairs();
+    }
     const nlohmann::json json = make_report(model, run, stats);
     if (!o.report_path.empty()) {
       std::ofstream out(o.report_path);
