@@ -34,7 +34,7 @@ TEST_CASE("simulate writes a report with the documented fields", "[cli]") {
   CHECK(j.at("state_hash").get<std::string>().size() == 16);
   CHECK(j.at("max_penetration_m").is_number());
   CHECK(j.at("max_gap_m").is_number());
-  for (const char* field : {"between_objects", "within_objects", "rest_pairs_left_out"})
+  for (const char* field : {"between_objects", "within_objects", "rest_crossings"})
     CHECK(j.at("surface_intersections").at(field).is_number_unsigned());
   CHECK(j.at("energy").at("total_j").is_number());
   CHECK(j.at("stages").contains("dynamics"));

@@ -24,7 +24,7 @@ nlohmann::json make_report(const ffd::Model& model, const RunSummary& run, const
   report["contacts"] = contacts;
   report["surface_intersections"] = {{"between_objects", run.intersections.between},
                                      {"within_objects", run.intersections.within},
-                                     {"rest_pairs_left_out", run.rest_intersections}};
+                                     {"rest_crossings", run.rest_intersections}};
   report["max_box_penetration_m"] = stats.max_box_penetration_m();
   report["hash_overflow"] = stats.any_overflow();
   report["energy"] = {{"kinetic_j", run.energy.kinetic},

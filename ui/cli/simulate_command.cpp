@@ -31,7 +31,7 @@ void print_summary(const RunSummary& run, const ffd::Model& model, const ffd::St
   for (const ffd::SurfaceContact& c : run.contacts.contacts)
     std::printf("  %-20s %-20s penetration %8.3f mm  gap %8.3f mm\n", c.a.c_str(), c.b.c_str(), c.penetration_m * 1e3,
                 c.gap_m * 1e3);
-  std::printf("surface intersections: %zu triangle pairs between objects, %zu within one (%zu rest-shape pairs left out)\n",
+  std::printf("surface intersections: %zu triangle pairs between objects, %zu within one (the rest shapes cross in %zu, left out)\n",
               run.intersections.between, run.intersections.within, run.rest_intersections);
   std::printf("%-14s %9s %9s %9s %9s\n", "stage", "mean us", "p50 us", "p99 us", "max us");
   for (ffd::Stage stage : model.pipeline) {

@@ -38,9 +38,12 @@ struct IntersectionCount {
 // receives them, sorted.
 IntersectionCount find_intersections(const std::vector<SurfaceMesh>& meshes, std::vector<TrianglePair>* pairs = nullptr);
 
-// The same on a Model's surfaces as a State moves them (eq. 2), leaving out the pairs each
+// The same on a Model's surfaces as a State moves them (eq. 2), leaving out the crossings each
 // surface already has in its rest shape, found once here: the Utah teapot's spout and handle
-// pass through its body. Meshes are the Model's objects, in order.
+// pass through its body (156 pairs). A pair of one surface's triangles that both cross in the
+// rest shape is left out too: as the surface bends, a rest crossing moves on to the next
+// triangle (the teapots, apart at level 0, kept 5 such pairs). Meshes are the Model's
+// objects, in order.
 class SurfaceIntersections {
  public:
   explicit SurfaceIntersections(const Model& model);
@@ -51,7 +54,8 @@ class SurfaceIntersections {
 
  private:
   const Model& model_;
-  std::vector<TrianglePair> rest_;  // sorted
+  std::vector<TrianglePair> rest_;                 // sorted
+  std::vector<std::vector<Index>> rest_triangles_;  // per object: its triangles in rest_, sorted
 };
 
 }  // namespace ffd

@@ -71,7 +71,8 @@ std::vector<SurfaceMesh> surfaces(const Model& model, const State& state) {
 }
 }  // namespace
 
-SurfaceIntersections::SurfaceIntersections(const Model& model) : model_(model) {
+SurfaceIntersections::SurfaceIntersections(const Model& model)
+    : model_(model), rest_triangles_(model.objects.size()) {
   // Each surface in its rest shape, alone (objects may start anywhere relative to each other).
   State rest;
   rest.x = model.node_rest;
@@ -81,7 +82,10 @@ SurfaceIntersections::SurfaceIntersections(const Model& model) : model_(model) {
     for (TrianglePair& p : found) {
       p.first.mesh = p.second.mesh = i;
       rest_.push_back(p);
+      rest_triangles_[i].push_back(p.first.triangle);
+      rest_triangles_[i].push_back(p.second.triangle);
     }
+    std::sort(rest_triangles_[i].begin(), rest_triangles_[i].end());
   }
   std::sort(rest_.begin(), rest_.end());
 }
@@ -90,7 +94,12 @@ std::vector<TrianglePair> SurfaceIntersections::pairs(const State& state) const 
   std::vector<TrianglePair> found;
   find_intersections(surfaces(model_, state), &found);
   std::vector<TrianglePair> kept;
-  std::set_difference(found.begin(), found.end(), rest_.begin(), rest_.end(), std::back_inserter(kept));
+  auto crosses_at_rest = [&](const TriangleRef& t) {
+    const std::vector<Index>& r = rest_triangles_[t.mesh];
+    return std::binary_search(r.begin(), r.end(), t.triangle);
+  };
+  for (const TrianglePair& p : found)
+    if (p.first.mesh != p.second.mesh || !crosses_at_rest(p.first) || !crosses_at_rest(p.second)) kept.push_back(p);
   return kept;
 }
 
