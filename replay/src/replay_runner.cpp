@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "ffd/measure.h"
+#include "ffd/surface_intersections.h"
 #include "ffd/surface_metrics.h"
 
 namespace ffd {
@@ -28,6 +29,11 @@ std::string number(double value, const char* unit) {
   return buffer;
 }
 
+// The most intersecting triangle pairs one intersection assertion saw, over its snapshots.
+struct IntersectionMeasure {
+  std::uint64_t max_pairs = 0, worst_step = 0, samples = 0;
+};
+
 // Surface measurements of one gap assertion, over the snapshots it asked for.
 struct GapMeasure {
   double max_gap_m = 0.0, max_penetration_m = 0.0;
@@ -38,6 +44,7 @@ struct GapMeasure {
 std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
   std::uint64_t g = 0;
   for (const GapLimit& gap : script.gaps) g = std::gcd(g, gap.every_steps);
+  for (const IntersectionLimit& i : script.intersections) g = std::gcd(g, i.every_steps);
   for (const PositionLimit& p : script.positions) g = std::gcd(g, p.every_steps);
   if (script.rest.speed_max_m_s) g = std::gcd(g, script.rest.every_steps);
   for (const CreepLimit& c : script.creeps) g = std::gcd(g, c.every_steps);
@@ -141,6 +148,9 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   compute_ns.reserve(script.steps);
   lateness_ns.reserve(script.steps);
   std::vector<GapMeasure> gaps(script.gaps.size());
+  std::vector<IntersectionMeasure> intersections(script.intersections.size());
+  std::optional<SurfaceIntersections> crossings;  // the rest shapes' crossings, found once if asked for
+  if (!script.intersections.empty()) crossings.emplace(model);
   double largest_cell = 0.0;
   for (const ObjectModel& o : model.objects) largest_cell = std::max(largest_cell, o.cell_size);
   State surface_state = initial_state(model);  // holds a snapshot's lattice for deformed_surface()
@@ -299,6 +309,17 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
         rest_centres = centres;
         rest_step = step;
       }
+      for (std::size_t i = 0; i < script.intersections.size(); ++i) {
+        const IntersectionLimit& limit = script.intersections[i];
+        if (step < limit.from_step || step > limit.to_step || step % limit.every_steps != 0) continue;
+        const std::uint64_t pairs = crossings->count(surface_state).total();
+        IntersectionMeasure& out = intersections[i];
+        if (pairs > out.max_pairs || out.samples == 0) {
+          out.max_pairs = pairs;
+          out.worst_step = step;
+        }
+        ++out.samples;
+      }
       for (std::size_t i = 0; i < script.gaps.size(); ++i) {
         const GapLimit& g = script.gaps[i];
         if (step < g.from_step || step > g.to_step || step % g.every_steps != 0) continue;
@@ -426,6 +447,19 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
     check_upper(out, name + ".max_gap_m", g.where, g.max_gap_m, gaps[i].max_gap_m, "m", false, gaps[i].worst_gap_step);
     check_upper(out, name + ".max_penetration_m", g.where, g.max_penetration_m, gaps[i].max_penetration_m, "m", false,
                 gaps[i].worst_penetration_step);
+  }
+  for (std::size_t i = 0; i < script.intersections.size(); ++i) {
+    const IntersectionLimit& limit = script.intersections[i];
+    const IntersectionMeasure& m = intersections[i];
+    AssertionResult a;
+    a.name = "intersections.max_pairs";
+    a.where = limit.where;
+    a.measured = m.samples ? std::to_string(m.max_pairs) + " at step " + std::to_string(m.worst_step)
+                           : "no samples (snapshots dropped or the run ended early)";
+    a.limit = "<= " + std::to_string(limit.max_pairs) + " from step " + std::to_string(limit.from_step) + " to " +
+              std::to_string(limit.to_step);
+    a.passed = m.samples > 0 && m.max_pairs <= limit.max_pairs;
+    out.push_back(a);
   }
   for (std::size_t i = 0; i < script.positions.size(); ++i) {
     const PositionLimit& p = script.positions[i];

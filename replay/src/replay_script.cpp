@@ -25,8 +25,10 @@ const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
 const std::vector<std::string_view> kPathKeys = {"interpolation", "keyframes"};
 const std::vector<std::string_view> kKeyframeKeys = {"at_step", "at_ms", "position"};
 const std::vector<std::string_view> kInterpolations = {"linear", "smooth", "step"};
-const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "position", "rest",
-                                                   "motion", "creep", "force", "force_window", "hash"};
+const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "intersections", "position",
+                                                   "rest", "motion", "creep", "force", "force_window", "hash"};
+const std::vector<std::string_view> kIntersectionKeys = {"max_pairs", "from_step", "from_ms", "to_step",
+                                                         "to_ms", "every_steps", "every_ms"};
 const std::vector<std::string_view> kMotionKeys = {"rms_speed_max_m_s", "kinetic_energy_max_j", "speed_max_m_s",
                                                    "from_step", "from_ms"};
 const std::vector<std::string_view> kCreepKeys = {"object", "max_m", "from_step", "from_ms", "to_step", "to_ms",
@@ -541,6 +543,17 @@ class ScriptReader {
       if (!gap.max_gap_m && !gap.max_penetration_m) g.fail_here(path, "give 'max_gap_m' and/or 'max_penetration_m'");
       read_window(g, path, script.steps, gap.from_step, gap.to_step, gap.every_steps);
       script.gaps.push_back(gap);
+    }
+    const auto intersections = array_of_tables(a, "intersections");
+    for (std::size_t i = 0; i < intersections.size(); ++i) {
+      const std::string path = "assert.intersections[" + std::to_string(i) + "]";
+      const TableReader t(origin_, *intersections[i], path, kIntersectionKeys);
+      IntersectionLimit limit;
+      limit.where = location(origin_, intersections[i]->source());
+      if (!t.has("max_pairs")) t.fail_missing("max_pairs", " (intersecting triangle pairs at most)");
+      limit.max_pairs = static_cast<std::uint64_t>(t.integer("max_pairs", 0, 0, 1'000'000'000));
+      read_window(t, path, script.steps, limit.from_step, limit.to_step, limit.every_steps);
+      script.intersections.push_back(limit);
     }
     const auto positions = array_of_tables(a, "position");
     for (std::size_t i = 0; i < positions.size(); ++i) {

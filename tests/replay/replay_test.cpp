@@ -496,3 +496,34 @@ TEST_CASE("Replay scripts: malformed motion, creep and force-window assertions n
   CHECK_THROWS_WITH(parse(script_with("[[assert.force_window]]\nfrom_step = 10\nto_step = 20\n")),
                     Contains("give 'relative_std_max', 'mean_min_n', 'mean_max_n' and/or 'above_previous'"));
 }
+
+TEST_CASE("Replay scripts: an intersection assertion counts crossing surfaces, and fails past its limit") {
+  // The upper box falls 4.9 cm onto the lower one (about 0.1 s) and, under the paper's
+  // response, rests 0.09 mm into it: its side faces cross the lower box's top face.
+  auto run = [&](const std::string& asserts) {
+    const LoadedReplay replay = parse("version = 1\nscene = \"" + kScene + "\"\nsteps = 500\n" + asserts);
+    return run_replay(replay, ReplayRunOptions{});
+  };
+  const ReplayResult falling = run("[[assert.intersections]]\nto_step = 80\nevery_steps = 20\nmax_pairs = 0\n");
+  const AssertionResult* apart = find_assertion(falling, "intersections.max_pairs");
+  REQUIRE(apart);
+  CHECK(apart->passed);
+  CHECK_THAT(apart->measured, StartsWith("0 at step"));
+  const ReplayResult resting = run("[[assert.intersections]]\nfrom_step = 300\nevery_steps = 50\nmax_pairs = 0\n");
+  const AssertionResult* crossed = find_assertion(resting, "intersections.max_pairs");
+  REQUIRE(crossed);
+  CHECK_FALSE(crossed->passed);
+  CHECK_FALSE(resting.passed());
+  CHECK_THAT(crossed->limit, Contains("<= 0 from step 300 to 500"));
+}
+
+TEST_CASE("Replay scripts: malformed intersection assertions name the file, line and field") {
+  CHECK_THROWS_WITH(parse(script_with("[[assert.intersections]]\nfrom_step = 10\n")),
+                    Contains("assert.intersections[0].max_pairs: missing required key"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.intersections]]\nmax_pairs = -1\n")),
+                    Contains("assert.intersections[0].max_pairs"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.intersections]]\nmax_pairs = 1.5\n")),
+                    Contains("assert.intersections[0].max_pairs"));
+  CHECK_THROWS_WITH(parse(script_with("[[assert.intersections]]\nmax_pairs = 0\npairs = 3\n")),
+                    Contains("test.toml:6:1: assert.intersections[0].pairs: unknown key 'pairs'"));
+}

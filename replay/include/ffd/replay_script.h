@@ -62,6 +62,16 @@ struct GapLimit {
   std::uint64_t every_steps = 10;
 };
 
+// The surfaces' intersecting triangle pairs (surface_intersections.h: between objects and
+// within one, rest-shape crossings left out) stay at most max_pairs every `every_steps` steps
+// in [from_step, to_step].
+struct IntersectionLimit {
+  std::string where;
+  std::uint64_t max_pairs = 0;
+  std::uint64_t from_step = 0, to_step = 0;
+  std::uint64_t every_steps = 10;
+};
+
 // The centre of mass of each named object (lattice nodes, mass-weighted), optionally minus
 // that of another object, stays inside [min, max] every `every_steps` steps in
 // [from_step, to_step]; an axis without a bound has -inf / +inf.
@@ -168,6 +178,7 @@ struct ReplayScript {
   StabilityLimits stability;
   ContactLimits contact;
   std::vector<GapLimit> gaps;
+  std::vector<IntersectionLimit> intersections;
   std::vector<PositionLimit> positions;
   RestLimit rest;
   MotionLimits motion;
