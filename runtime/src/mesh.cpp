@@ -406,6 +406,130 @@ SurfaceMesh make_sphere_mesh(double radius, int subdivisions) {
   return mesh;
 }
 
+namespace {
+
+// A point of a profile in the half-plane of revolution: r >= 0 from the y axis, and y.
+struct ProfilePoint {
+  double r = 0.0, y = 0.0;
+};
+
+// The closed profile polygon `profile` (consecutive points joined, the last to the first)
+// turned about the y axis in `segments` steps. A point on the axis (r = 0) becomes one pole
+// vertex; an edge along the axis makes no triangles. Wound outward whatever the profile's
+// direction: the triangles are flipped where the enclosed volume comes out negative.
+SurfaceMesh revolve_profile(const std::vector<ProfilePoint>& profile, int segments) {
+  SurfaceMesh mesh;
+  std::vector<Index> first_vertex;  // per profile point: its vertex, or the first of its ring
+  const double step = 2.0 * std::acos(-1.0) / segments;
+  for (const ProfilePoint& p : profile) {
+    first_vertex.push_back(static_cast<Index>(mesh.vertices.size()));
+    if (p.r == 0.0) {
+      mesh.vertices.emplace_back(0.0, p.y, 0.0);
+      continue;
+    }
+    for (int j = 0; j < segments; ++j)
+      mesh.vertices.emplace_back(p.r * std::cos(j * step), p.y, -p.r * std::sin(j * step));
+  }
+  const auto vertex = [&](std::size_t k, int j) {
+    return profile[k].r == 0.0 ? first_vertex[k] : first_vertex[k] + static_cast<Index>(j % segments);
+  };
+  for (std::size_t k = 0; k < profile.size(); ++k) {
+    const std::size_t next = (k + 1) % profile.size();
+    const bool pole = profile[k].r == 0.0, next_pole = profile[next].r == 0.0;
+    if (pole && next_pole) continue;
+    for (int j = 0; j < segments; ++j) {
+      const Index a = vertex(k, j), b = vertex(k, j + 1), c = vertex(next, j + 1), d = vertex(next, j);
+      if (!pole) mesh.triangles.push_back({a, b, c});
+      if (!next_pole) mesh.triangles.push_back({a, c, d});
+    }
+  }
+  if (enclosed_volume(mesh) < 0.0)
+    for (Triangle& t : mesh.triangles) std::swap(t[1], t[2]);
+  return mesh;
+}
+
+// `pieces` points from `from` towards `to` (that one left out) on a straight line; append_arc:
+// on the arc of `radius` about the origin, angles in radians from the +r direction.
+void append_line(std::vector<ProfilePoint>& out, ProfilePoint from, ProfilePoint to, int pieces) {
+  for (int i = 0; i < pieces; ++i) {
+    const double t = static_cast<double>(i) / pieces;
+    out.push_back({from.r + t * (to.r - from.r), from.y + t * (to.y - from.y)});
+  }
+}
+void append_arc(std::vector<ProfilePoint>& out, double radius, double from_angle, double to_angle, int pieces) {
+  for (int i = 0; i < pieces; ++i) {
+    const double angle = from_angle + (to_angle - from_angle) * i / pieces;
+    out.push_back({std::max(0.0, radius * std::cos(angle)), radius * std::sin(angle)});
+  }
+}
+
+// The most points a profile may have: with 1024 segments, 4.2 million triangles.
+constexpr double kMaxProfilePoints = 2048;
+
+// Pieces for a length when the circumference 2 pi radius has `segments`: at least one. Throws
+// when a profile would need more than kMaxProfilePoints (a ring far taller than it is wide).
+int pieces_for(const char* what, double length, double radius, int segments) {
+  const double pieces = std::round(length / (2.0 * std::acos(-1.0) * radius / segments));
+  if (!(pieces <= kMaxProfilePoints))
+    throw std::invalid_argument(std::string(what) + ": the shape is too long for its radius (its profile would need " +
+                                "more than 2048 points)");
+  return std::max(1, static_cast<int>(pieces));
+}
+
+void check_revolution(const char* what, double radius, double thickness, int segments) {
+  if (!std::isfinite(radius) || radius <= 0.0) throw std::invalid_argument(std::string(what) + ": radius must be finite and > 0");
+  if (!std::isfinite(thickness) || thickness <= 0.0)
+    throw std::invalid_argument(std::string(what) + ": thickness must be finite and > 0");
+  if (segments < 8 || segments > 1024)
+    throw std::invalid_argument(std::string(what) + ": segments must be in 8..1024, got " + std::to_string(segments));
+}
+
+}  // namespace
+
+SurfaceMesh make_torus_mesh(double radius, double thickness, int segments) {
+  check_revolution("make_torus_mesh", radius, thickness, segments);
+  if (!(thickness < 2.0 * radius)) throw std::invalid_argument("make_torus_mesh: thickness must be < 2 radius");
+  const double tube = 0.5 * thickness;
+  // The tube's circle, about as finely as the centre line, and at least 12 around.
+  const int around = std::max(12, pieces_for("make_torus_mesh", 2.0 * std::acos(-1.0) * tube, radius, segments));
+  std::vector<ProfilePoint> profile;
+  for (int i = 0; i < around; ++i) {
+    const double angle = 2.0 * std::acos(-1.0) * i / around;
+    profile.push_back({radius + tube * std::cos(angle), tube * std::sin(angle)});
+  }
+  return revolve_profile(profile, segments);
+}
+
+SurfaceMesh make_ring_mesh(double radius, double thickness, double height, int segments) {
+  check_revolution("make_ring_mesh", radius, thickness, segments);
+  if (!(thickness < radius)) throw std::invalid_argument("make_ring_mesh: thickness must be < radius");
+  if (!std::isfinite(height) || height <= 0.0) throw std::invalid_argument("make_ring_mesh: height must be finite and > 0");
+  const double inner = radius - thickness, h = 0.5 * height;
+  const int across = pieces_for("make_ring_mesh", thickness, radius, segments);
+  const int along = pieces_for("make_ring_mesh", height, radius, segments);
+  std::vector<ProfilePoint> profile;
+  append_line(profile, {inner, -h}, {radius, -h}, across);
+  append_line(profile, {radius, -h}, {radius, h}, along);
+  append_line(profile, {radius, h}, {inner, h}, across);
+  append_line(profile, {inner, h}, {inner, -h}, along);
+  return revolve_profile(profile, segments);
+}
+
+SurfaceMesh make_bowl_mesh(double radius, double thickness, int segments) {
+  check_revolution("make_bowl_mesh", radius, thickness, segments);
+  if (!(thickness < radius)) throw std::invalid_argument("make_bowl_mesh: thickness must be < radius");
+  const double inner = radius - thickness, quarter = 0.5 * std::acos(-1.0);
+  const int outer_pieces = pieces_for("make_bowl_mesh", quarter * radius, radius, segments);
+  const int inner_pieces = pieces_for("make_bowl_mesh", quarter * inner, radius, segments);
+  std::vector<ProfilePoint> profile;
+  append_arc(profile, radius, -quarter, 0.0, outer_pieces);  // outside, from the bottom pole up
+  append_line(profile, {radius, 0.0}, {inner, 0.0}, pieces_for("make_bowl_mesh", thickness, radius, segments));  // the rim
+  append_arc(profile, inner, 0.0, -quarter, inner_pieces);  // inside, down
+  profile.push_back({0.0, -inner});  // the inside's pole; the axis edge to the outside's pole closes it
+  profile[0].r = 0.0;                // exactly on the axis: a pole
+  return revolve_profile(profile, segments);
+}
+
 std::pair<Vec3, Vec3> mesh_bounds(const SurfaceMesh& mesh) {
   if (mesh.vertices.empty()) throw std::invalid_argument("mesh_bounds: the mesh has no vertices");
   Vec3 lo = mesh.vertices[0], hi = mesh.vertices[0];

@@ -41,7 +41,8 @@ const std::vector<std::string_view> kSimulationKeys = {
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
     "name",         "mesh",          "shape",          "glyph",          "size",
-    "radius",       "subdivisions",  "subdivide",      "scale",          "position",
+    "radius",       "subdivisions",  "thickness",      "height",         "segments",
+    "subdivide",    "scale",         "position",
     "rotation_deg", "velocity",      "angular_velocity", "cell_size",    "mass",
     "fill_interior", "weld_tolerance", "min_component_fraction", "mass_spring", "shape_matching"};
 // A group: `count` copies of one object description, placed on a grid, with random
@@ -52,7 +53,15 @@ const std::vector<std::string_view> kRandomKeys = {"velocity", "angular_velocity
 const std::vector<std::string_view> kGlyphKeys = {"text", "font", "em_size", "depth", "sample_spacing"};
 const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations", "bulk_modulus"};
 const std::vector<std::string_view> kShapeMatchingKeys = {"stiffness", "region_half_width", "damping"};
-const std::vector<std::string_view> kShapeNames = {"box", "sphere"};
+const std::vector<std::string_view> kShapeNames = {"box", "sphere", "torus", "ring", "bowl"};
+// The keys each built-in shape reads (besides `shape`); any other of kShapeKeys is an error.
+const std::vector<std::string_view> kShapeKeys = {"size", "radius", "subdivisions", "thickness", "height", "segments"};
+std::vector<std::string_view> keys_of_shape(std::string_view shape) {
+  if (shape == "box") return {"size"};
+  if (shape == "sphere") return {"radius", "subdivisions"};
+  if (shape == "ring") return {"radius", "thickness", "height", "segments"};
+  return {"radius", "thickness", "segments"};  // torus, bowl
+}
 
 bool contains(const std::vector<std::string_view>& words, std::string_view word) {
   return std::find(words.begin(), words.end(), word) != words.end();
@@ -423,11 +432,11 @@ class SceneReader {
     }
     if (given.empty()) {
       object.fail_here(object.path(),
-                       "needs a surface: 'mesh' (a file path), 'shape' (\"box\" or \"sphere\") or 'glyph' "
+                       "needs a surface: 'mesh' (a file path), 'shape' (a built-in: " + join(kShapeNames) + ") or 'glyph' "
                        "(a letter of a font)");
     }
     if (given.front() != "shape") {
-      for (const std::string_view shape_key : {"size", "radius", "subdivisions"}) {
+      for (const std::string_view shape_key : kShapeKeys) {
         if (object.has(shape_key))
           object.fail_at(shape_key, "only used with 'shape', not with '" + std::string(given.front()) + "'");
       }
@@ -443,18 +452,38 @@ class SceneReader {
       }
       object.fail_at("shape", problem + " (valid shapes: " + join(kShapeNames) + ")");
     }
-    if (source == "box") {
-      for (const std::string_view sphere_key : {"radius", "subdivisions"}) {
-        if (object.has(sphere_key)) object.fail_at(sphere_key, "only used with shape = \"sphere\"");
+    const std::vector<std::string_view> used = keys_of_shape(source);
+    for (const std::string_view key : kShapeKeys) {
+      if (object.has(key) && !contains(used, key)) {
+        std::vector<std::string_view> shapes;  // the shapes that do use it
+        for (const std::string_view shape : kShapeNames)
+          if (contains(keys_of_shape(shape), key)) shapes.push_back(shape);
+        object.fail_at(key, "not used with shape = \"" + source + "\" (only with " + join(shapes) + ")");
       }
-      if (!object.has("size")) object.fail_missing("size", " (shape = \"box\" needs size = [x, y, z] in m)");
+    }
+    const std::string needs = " (shape = \"" + source + "\" needs ";
+    if (source == "box") {
+      if (!object.has("size")) object.fail_missing("size", needs + "size = [x, y, z] in m)");
       return make_box_mesh(object.vec3("size", Vec3::Zero(), kPositive));
     }
-    if (object.has("size")) object.fail_at("size", "only used with shape = \"box\"");
-    const double radius =
-        object.required_number("radius", kPositive, " (shape = \"sphere\" needs radius in m)");
-    const int subdivisions = static_cast<int>(object.integer("subdivisions", 3, 0, 6));
-    return make_sphere_mesh(radius, subdivisions);
+    const double radius = object.required_number("radius", kPositive, needs + "radius in m)");
+    if (source == "sphere") return make_sphere_mesh(radius, static_cast<int>(object.integer("subdivisions", 3, 0, 6)));
+    // Surfaces of revolution (mesh.h): the wall must leave a hole.
+    const double thickness = object.required_number("thickness", kPositive, needs + "thickness in m)");
+    const double thickest = source == "torus" ? 2.0 * radius : radius;
+    if (!(thickness < thickest)) {
+      object.fail_at("thickness", "must be < " + std::string(source == "torus" ? "2 x radius" : "radius") + " (" +
+                                      format_number(thickest) + " m; got " + format_number(thickness) + ")");
+    }
+    const int segments = static_cast<int>(object.integer("segments", 48, 8, 1024));
+    if (source == "torus") return make_torus_mesh(radius, thickness, segments);
+    if (source == "bowl") return make_bowl_mesh(radius, thickness, segments);
+    const double height = object.required_number("height", kPositive, needs + "height in m)");
+    try {
+      return make_ring_mesh(radius, thickness, height, segments);
+    } catch (const std::invalid_argument& e) {  // a profile too long for its radius
+      object.fail_at("height", e.what());
+    }
   }
 
   // An extruded letter of a font (glyph_mesh.h); meshes are made once per character.

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <set>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace {
@@ -325,6 +326,45 @@ TEST_CASE("make_sphere_mesh is a closed outward icosphere", "[mesh]") {
   CHECK_THROWS_AS(ffd::make_sphere_mesh(1.0, -1), std::invalid_argument);
   CHECK_THROWS_AS(ffd::make_sphere_mesh(1.0, 7), std::invalid_argument);
   CHECK_THROWS_AS(ffd::make_sphere_mesh(0.0, 2), std::invalid_argument);
+}
+
+TEST_CASE("torus, ring and bowl meshes are closed, outward and hold their volume", "[mesh]") {
+  const double pi = std::numbers::pi;
+  // Analytic volumes; the polygons inscribed in their circles hold a little less (fine enough
+  // at 192 segments to be within 2 %).
+  struct Case {
+    const char* name;
+    SurfaceMesh mesh;
+    double volume;  // m^3
+  };
+  const Case cases[] = {
+      {"torus", ffd::make_torus_mesh(0.05, 0.02, 192), 2.0 * pi * pi * 0.05 * 0.01 * 0.01},
+      {"ring", ffd::make_ring_mesh(0.04, 0.01, 0.02, 192), pi * (0.04 * 0.04 - 0.03 * 0.03) * 0.02},
+      {"bowl", ffd::make_bowl_mesh(0.05, 0.01, 192), 2.0 / 3.0 * pi * (0.05 * 0.05 * 0.05 - 0.04 * 0.04 * 0.04)},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    CHECK(closed_and_consistent(c.mesh));
+    CHECK(ffd::enclosed_volume(c.mesh) < c.volume);
+    CHECK(ffd::enclosed_volume(c.mesh) == Approx(c.volume).epsilon(0.02));
+    // Euler characteristic V - E + F: 0 for the torus and the ring (genus 1), 2 for the bowl.
+    const std::ptrdiff_t euler = static_cast<std::ptrdiff_t>(c.mesh.vertices.size()) -
+                                 static_cast<std::ptrdiff_t>(c.mesh.triangles.size()) / 2;
+    CHECK(euler == (std::string(c.name) == "bowl" ? 2 : 0));
+  }
+  // A tube 2 cm thick around a 5 cm centre line has a circumference a fifth of the centre
+  // line's: 192 / 5 = 38.4, so 38 pieces around it, and 192 x 38 quads; at 48 segments the
+  // tube keeps 12 around (9.6 would be too coarse a circle).
+  CHECK(cases[0].mesh.triangles.size() == 192u * 38u * 2u);
+  CHECK(ffd::make_torus_mesh(0.05, 0.02, 48).triangles.size() == 48u * 12u * 2u);
+  CHECK(closed_and_consistent(ffd::make_bowl_mesh(0.05, 0.01, 8)));
+  const auto [lo, hi] = ffd::mesh_bounds(cases[2].mesh);
+  CHECK(hi.y() == Approx(0.0).margin(1e-15));  // the bowl's rim
+  CHECK(lo.y() == Approx(-0.05));
+  CHECK_THROWS_AS(ffd::make_torus_mesh(0.05, 0.1, 48), std::invalid_argument);   // thicker than its hole allows
+  CHECK_THROWS_AS(ffd::make_ring_mesh(0.04, 0.04, 0.02, 48), std::invalid_argument);  // no hole
+  CHECK_THROWS_AS(ffd::make_bowl_mesh(0.05, 0.01, 7), std::invalid_argument);
+  CHECK_THROWS_AS(ffd::make_ring_mesh(0.04, 0.01, -1.0, 48), std::invalid_argument);
 }
 
 TEST_CASE("mesh_bounds gives the extreme coordinates", "[mesh]") {

@@ -207,6 +207,27 @@ TEST_CASE("missing optional keys take their documented defaults", "[scene_loader
   }
 }
 
+TEST_CASE("torus, ring and bowl shapes are read with their sizes", "[scene_loader]") {
+  const ffd::SceneSpec scene = parse(
+      "[simulation]\neffects = [\"gravity\"]\n"
+      "[[object]]\nname = \"t\"\nshape = \"torus\"\nradius = 0.05\nthickness = 0.02\ncell_size = 0.01\nmass_spring = {}\n"
+      "[[object]]\nname = \"r\"\nshape = \"ring\"\nradius = 0.04\nthickness = 0.01\nheight = 0.02\nsegments = 32\n"
+      "cell_size = 0.01\nmass_spring = {}\n"
+      "[[object]]\nname = \"b\"\nshape = \"bowl\"\nradius = 0.05\nthickness = 0.008\ncell_size = 0.01\nmass_spring = {}\n");
+  REQUIRE(scene.objects.size() == 3);
+  const ffd::SurfaceMesh torus = ffd::make_torus_mesh(0.05, 0.02, 48);  // 48 segments by default
+  const ffd::SurfaceMesh ring = ffd::make_ring_mesh(0.04, 0.01, 0.02, 32);
+  const ffd::SurfaceMesh bowl = ffd::make_bowl_mesh(0.05, 0.008, 48);
+  CHECK(scene.objects[0].source == "torus");
+  CHECK(scene.objects[0].mesh.vertices == torus.vertices);
+  CHECK(scene.objects[1].mesh.triangles == ring.triangles);
+  CHECK(scene.objects[1].mesh.vertices == ring.vertices);
+  CHECK(scene.objects[2].mesh.vertices == bowl.vertices);
+  std::vector<std::string> log;
+  const ffd::Model model = ffd::compile(scene, log);  // each a closed surface in its lattice
+  CHECK(model.objects.size() == 3);
+}
+
 TEST_CASE("the shipped test scenes load", "[scene_loader]") {
   const ffd::SceneSpec pair = ffd::load_scene_file(kSceneDir + "/shape_matching_pair.toml");
   CHECK(pair.settings.effects ==
@@ -352,8 +373,8 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
   }
   SECTION("neither mesh nor shape") {
     require_error(scene_with_object("name = \"a\"\n[object.mass_spring]\n"),
-                  "inline.toml:3:1: object[0]: needs a surface: 'mesh' (a file path), 'shape' (\"box\" or "
-                  "\"sphere\") or 'glyph' (a letter of a font)");
+                  "inline.toml:3:1: object[0]: needs a surface: 'mesh' (a file path), 'shape' (a built-in: box, "
+                  "sphere, torus, ring, bowl) or 'glyph' (a letter of a font)");
   }
   SECTION("no dynamics table") {
     require_error(scene_with_object("name = \"a\"\nshape = \"sphere\"\nradius = 0.1\n"),
@@ -452,7 +473,7 @@ TEST_CASE("scene value errors", "[scene_loader]") {
   SECTION("unknown shape") {
     require_error(scene_with_object("name = \"a\"\nshape = \"spher\"\n[object.mass_spring]\n"),
                   "inline.toml:5:9: object[0].shape: unknown shape 'spher'; did you mean 'sphere'? (valid "
-                  "shapes: box, sphere)");
+                  "shapes: box, sphere, torus, ring, bowl)");
   }
   SECTION("box without a size") {
     require_error(
@@ -463,7 +484,34 @@ TEST_CASE("scene value errors", "[scene_loader]") {
   SECTION("sphere key on a box") {
     require_error(scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [1, 1, 1]\nradius = 1\n"
                                     "[object.mass_spring]\n"),
-                  "inline.toml:7:10: object[0].radius: only used with shape = \"sphere\"");
+                  "inline.toml:7:10: object[0].radius: not used with shape = \"box\" (only with sphere, torus, "
+                  "ring, bowl)");
+  }
+  SECTION("ring without a height") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"ring\"\nradius = 0.04\nthickness = 0.01\n"
+                                    "[object.mass_spring]\n"),
+                  "inline.toml:3:1: object[0].height: missing required key (shape = \"ring\" needs height in m)");
+  }
+  SECTION("a bowl's wall as thick as the bowl") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"bowl\"\nradius = 0.04\nthickness = 0.04\n"
+                                    "[object.mass_spring]\n"),
+                  "inline.toml:7:13: object[0].thickness: must be < radius (0.04 m; got 0.04)");
+  }
+  SECTION("a torus's segments out of range") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"torus\"\nradius = 0.04\nthickness = 0.01\n"
+                                    "segments = 4\n[object.mass_spring]\n"),
+                  "inline.toml:8:12: object[0].segments: must be in [8, 1024] (got 4)");
+  }
+  SECTION("a ring far taller than it is wide") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"ring\"\nradius = 0.01\nthickness = 0.005\n"
+                                    "height = 1000\n[object.mass_spring]\n"),
+                  "inline.toml:8:10: object[0].height: make_ring_mesh: the shape is too long for its radius (its "
+                  "profile would need more than 2048 points)");
+  }
+  SECTION("height on a torus") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"torus\"\nradius = 0.04\nthickness = 0.01\n"
+                                    "height = 0.01\n[object.mass_spring]\n"),
+                  "inline.toml:8:10: object[0].height: not used with shape = \"torus\" (only with ring)");
   }
   SECTION("shape key on a mesh") {
     require_error(

@@ -24,11 +24,11 @@ void check_exit(const std::string& arguments, int expected, const std::string& s
 }  // namespace
 
 TEST_CASE("Exit codes: the program without a known command is a usage error; --help succeeds", "[cli]") {
-  check_exit("", 1, "a command is required (simulate, replay, run, bench, accuracy, device-sim)");
+  check_exit("", 1, "a command is required (simulate, replay, run, bench, accuracy, piles, device-sim)");
   check_exit("frobnicate", 1, "unknown command 'frobnicate'");
   check_exit("--frobnicate", 1, "unknown option '--frobnicate'");
   check_exit("--help", 0, "simulate");
-  for (const char* command : {"simulate", "replay", "run", "bench", "accuracy", "device-sim"})
+  for (const char* command : {"simulate", "replay", "run", "bench", "accuracy", "piles", "device-sim"})
     check_exit(std::string(command) + " --help", 0, "Usage");
 }
 
@@ -89,6 +89,13 @@ TEST_CASE("Exit codes: bench and accuracy", "[cli]") {
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_accuracy");
   check_exit("accuracy -q --steps 20 --levels 2 --responses paper --out " + dir.string() + " " + kDiverging, 3, "");
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Exit codes: piles", "[cli]") {
+  check_exit("piles --steps 5", 1, "--steps: Value 5 not in range");
+  check_exit("piles --levels 9", 1, "--levels: Value 9 not in range");
+  check_exit("piles --responses exact", 1, "--responses");
+  check_exit("piles --seeds 1 --levels 2 --update-readme missing_readme.md", 2, "missing_readme.md");
 }
 
 TEST_CASE("Exit codes: device-sim", "[cli][device]") {

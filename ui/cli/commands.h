@@ -116,6 +116,23 @@ struct AccuracyOptions {
 void register_accuracy(CLI::App& app, AccuracyOptions& options);
 int run_accuracy_command(const AccuracyOptions& options);
 
+struct PilesOptions {
+  std::vector<std::uint64_t> seeds;  // empty: the short set (1-3), or with --long 1-20
+  bool long_set = false;
+  int objects = 6;
+  std::uint64_t steps = 3000;
+  std::uint64_t sample_every = 10;   // steps between intersection counts
+  std::vector<int> levels;           // empty: all
+  std::vector<std::string> responses = {"paper", "solver"};
+  std::string out_dir = "out/piles";
+  std::string scenes_dir;            // also write each pile's scene file here
+  std::string readme;                // Markdown file whose piles section is replaced
+  int threads = 0;
+  bool quiet = false;
+};
+void register_piles(CLI::App& app, PilesOptions& options);
+int run_piles_command(const PilesOptions& options);
+
 struct DeviceSimOptions {
   std::string script;          // a replay script: its [[probe_path]] is the device's motion
   std::string url;             // udp://HOST:PORT of `ffdsim run --device`

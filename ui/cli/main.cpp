@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
   ffdsim::register_bench(app, bench);
   ffdsim::AccuracyOptions accuracy;
   ffdsim::register_accuracy(app, accuracy);
+  ffdsim::PilesOptions piles;
+  ffdsim::register_piles(app, piles);
   ffdsim::DeviceSimOptions device_sim;
   ffdsim::register_device_sim(app, device_sim);
   // A first word that is no option must name a command: say which word, not only that a
@@ -116,5 +118,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("bench")) return ffdsim::run_bench(bench);
   if (app.got_subcommand("device-sim")) return ffdsim::run_device_sim(device_sim);
   if (app.got_subcommand("accuracy")) return ffdsim::run_accuracy_command(accuracy);
+  if (app.got_subcommand("piles")) return ffdsim::run_piles_command(piles);
   return ffdsim::kExitUsage;
 }

@@ -62,6 +62,15 @@ SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels);
 // Built-in shapes, centred at the origin, outward-facing.
 SurfaceMesh make_box_mesh(const Vec3& size);                 // size: full edge lengths, m
 SurfaceMesh make_sphere_mesh(double radius, int subdivisions);  // icosphere, 0..6 subdivisions
+// Surfaces of revolution about the y axis, `segments` (8..1024) around it; the profiles are
+// sampled about as finely as the circumference, so the triangles are near-equilateral.
+// Torus: its centre line a circle of `radius` in the xz plane, its tube `thickness` across
+// (< 2 radius). Ring: a short thick-walled tube, `radius` outside, its wall `thickness`
+// (< radius) and `height` along y, centred on y = 0. Bowl: a hemispherical shell opening up
+// (+y), `radius` outside, its wall `thickness` (< radius), its rim at y = 0.
+SurfaceMesh make_torus_mesh(double radius, double thickness, int segments);
+SurfaceMesh make_ring_mesh(double radius, double thickness, double height, int segments);
+SurfaceMesh make_bowl_mesh(double radius, double thickness, int segments);
 
 // Axis-aligned bounds of the vertices (min, max).
 std::pair<Vec3, Vec3> mesh_bounds(const SurfaceMesh& mesh);

@@ -1,0 +1,29 @@
+#pragma once
+// Seeded random piles: drop scenes of the hollow and thin shapes whose surfaces can pass
+// through each other edge first (rings, tori, thin plates, bowls, extruded letters), for the
+// tests and `ffdsim piles`. A pile is scene text (README.md, "Scene format"): the same seed
+// gives the same file on every machine, and a pile that goes wrong can be written out, opened
+// in the viewer and replayed.
+#include <cstdint>
+#include <string>
+
+namespace ffd {
+
+struct PileOptions {
+  std::uint64_t seed = 1;
+  int objects = 6;
+  double cell_size = 0.01;  // m, every object's FFD lattice cell
+  // Each object's size across (its largest extent before rotation) in cells, drawn uniformly.
+  int min_cells = 3, max_cells = 12;
+  // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
+  std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+};
+
+// The scene: `objects` objects of random shape, size and orientation in a column above a
+// floor, inside four walls twice the largest object across; their bounding spheres do not
+// overlap, so no two surfaces touch at the start. Inelastic contacts (alpha = 1) with
+// friction (beta = 0.5), self-collision on. Throws std::invalid_argument on options out of
+// range (objects 1..64, cells 1 <= min <= max <= 64, cell_size > 0).
+std::string random_pile_scene(const PileOptions& options);
+
+}  // namespace ffd

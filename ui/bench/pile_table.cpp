@@ -1,0 +1,185 @@
+#include "bench/pile_table.h"
+
+#include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <utility>
+
+#include "ffd/command.h"
+#include "ffd/step.h"
+#include "ffd/surface_intersections.h"
+#include "ffd/worker_pool.h"
+
+namespace ffdbench {
+
+namespace {
+
+constexpr double kRestSpeed = 0.05;  // m/s, RMS lattice-node speed of an object at rest (as accuracy_table.cpp)
+
+bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
+  for (const ffd::ObjectModel& object : model.objects) {
+    double kinetic = 0.0, mass = 0.0;  // 2 x J, kg
+    for (ffd::Index n = object.node_begin; n < object.node_end; ++n) {
+      kinetic += model.node_mass[n] * state.v[n].squaredNorm();
+      mass += model.node_mass[n];
+    }
+    if (!(kinetic <= mass * kRestSpeed * kRestSpeed)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy level, ffd::ContactResponse response,
+                 std::uint64_t steps, std::uint64_t sample_every, const Progress& progress, int threads) {
+  PileRun run;
+  run.seed = seed;
+  run.level = level;
+  run.response = response;
+  run.steps = steps;
+  run.sample_every = sample_every;
+  ffd::State state = ffd::initial_state(model);
+  const ffd::State initial = state;
+  ffd::Command command;  // level and response switched as a user's commands switch them
+  command.kind = ffd::CommandKind::SetAccuracy;
+  command.value = static_cast<double>(level);
+  ffd::apply_command(model, initial, state, command);
+  command.kind = ffd::CommandKind::SetResponse;
+  command.value = static_cast<double>(response);
+  ffd::apply_command(model, initial, state, command);
+  ffd::Scratch scratch = ffd::make_scratch(model);
+  ffd::WorkerPool pool(threads);
+  ffd::attach_pool(model, scratch, pool);
+  ffd::StepReport report;
+  const ffd::SurfaceIntersections crossings(model);
+
+  std::vector<double> step_ms;
+  step_ms.reserve(steps);
+  // Per pair of objects crossing now: the sample at which its crossing began.
+  std::map<std::pair<ffd::Index, ffd::Index>, std::size_t> crossing_since;
+  const double sample_ms = static_cast<double>(sample_every) * model.settings.dt * 1e3;
+  const auto close = [&](const std::pair<ffd::Index, ffd::Index>& objects, std::size_t since, std::size_t until) {
+    const double ms = static_cast<double>(until - since) * sample_ms;
+    if (ms > run.longest_crossing_ms) {
+      run.longest_crossing_ms = ms;
+      run.longest_between = model.objects[objects.first].name + " / " + model.objects[objects.second].name;
+    }
+  };
+  const std::uint64_t last_second_from = steps > 1000 ? steps - 1000 : 0;
+  const std::string what = "pile " + std::to_string(seed) + ": level " + std::to_string(static_cast<int>(level)) + ", " +
+                           ffd::response_name(response);
+  const std::uint64_t report_every = std::max<std::uint64_t>(1, steps / 100);
+  for (std::uint64_t i = 1; i <= steps; ++i) {
+    ffd::step(model, state, scratch, report);
+    ffd::grow_scratch(model, scratch, report);
+    run.finite = run.finite && report.finite;
+    step_ms.push_back(static_cast<double>(report.total_ns) * 1e-6);
+    if (!run.finite) break;
+    if (i % sample_every == 0) {
+      const std::vector<ffd::TrianglePair> pairs = crossings.pairs(state);
+      const std::size_t sample = run.pairs.size();
+      run.pairs.push_back(pairs.size());
+      run.pairs_max = std::max(run.pairs_max, pairs.size());
+      if (i > last_second_from) run.last_second_max = std::max(run.last_second_max, pairs.size());
+      std::map<std::pair<ffd::Index, ffd::Index>, std::size_t> now;
+      for (const ffd::TrianglePair& p : pairs) {
+        const std::pair<ffd::Index, ffd::Index> objects{p.first.mesh, p.second.mesh};
+        const auto before = crossing_since.find(objects);
+        now.emplace(objects, before == crossing_since.end() ? sample : before->second);
+      }
+      for (const auto& [objects, since] : crossing_since)
+        if (!now.count(objects)) close(objects, since, sample);
+      crossing_since = std::move(now);
+    }
+    if (i % report_every == 0 || i == steps) progress(what, i, steps);
+  }
+  for (const auto& [objects, since] : crossing_since) close(objects, since, run.pairs.size());  // still crossing
+  run.at_rest = run.finite && all_at_rest(model, state);
+  run.step_p50_ms = percentile(step_ms, 0.5);
+  run.step_p99_ms = percentile(step_ms, 0.99);
+  return run;
+}
+
+std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& cpu, int objects) {
+  if (runs.empty()) return "No piles were run.\n";
+  std::vector<std::pair<ffd::ContactResponse, ffd::Accuracy>> keys;
+  std::vector<std::uint64_t> seeds;
+  for (const PileRun& r : runs) {
+    if (std::find(keys.begin(), keys.end(), std::pair{r.response, r.level}) == keys.end()) keys.emplace_back(r.response, r.level);
+    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
+  }
+  std::ostringstream s;
+  const std::uint64_t steps = runs.front().steps;
+  s << "Measured by `ffdsim piles` on " << cpu << ": " << seeds.size() << " random piles (seeds " << seeds.front() << "-"
+    << seeds.back() << ") of " << objects
+    << " objects each (rings, tori, thin plates, bowls, letters; 3 to 12 cells of 1 cm across), dropped into a box and "
+       "run "
+    << steps
+    << " steps (1 ms) at each level and response. Intersecting triangle pairs of the surfaces (between objects and "
+       "within one) counted every "
+    << runs.front().sample_every
+    << " ms. Clean: at rest at the end, no pair in the last second and no crossing longer than 50 ms. Longest "
+       "crossing: the longest time one pair of objects (or one object with itself) stayed crossed.\n\n";
+  s << "| Response | Level | Clean piles | Pairs, mean of piles' max | Pairs in the last second, max | Longest crossing "
+       "| Step p50 / p99 |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& [response, level] : keys) {
+    std::size_t clean = 0, count = 0, last_max = 0;
+    double max_sum = 0.0, longest = 0.0, p50 = 0.0, p99 = 0.0;
+    const PileRun* longest_run = nullptr;
+    for (const PileRun& r : runs) {
+      if (r.response != response || r.level != level) continue;
+      ++count;
+      clean += r.clean() ? 1 : 0;
+      max_sum += static_cast<double>(r.pairs_max);
+      last_max = std::max(last_max, r.last_second_max);
+      if (!longest_run || r.longest_crossing_ms > longest) {
+        longest = r.longest_crossing_ms;
+        longest_run = &r;
+      }
+      p50 += r.step_p50_ms;
+      p99 = std::max(p99, r.step_p99_ms);
+    }
+    s << "| " << ffd::response_name(response) << " | " << static_cast<int>(level) << " " << ffd::accuracy_name(level)
+      << " | " << clean << " / " << count << " | " << fixed(max_sum / static_cast<double>(count), 1) << " | " << last_max
+      << " | "
+      << (longest > 0.0 ? fixed(longest, 0) + " ms (pile " + std::to_string(longest_run->seed) + ": " +
+                              longest_run->longest_between + ")"
+                        : std::string("none"))
+      << " | " << fixed(p50 / static_cast<double>(count), 3) << " / " << fixed(p99, 3) << " ms |\n";
+  }
+  bool header = false;
+  for (const PileRun& r : runs) {
+    if (r.clean()) continue;
+    if (!header) s << "\nPiles that are not clean:\n\n";
+    header = true;
+    s << "- pile " << r.seed << ", " << ffd::response_name(r.response) << " level " << static_cast<int>(r.level) << ": "
+      << (r.finite ? "" : "NOT FINITE; ") << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max
+      << " pairs in the last second (max " << r.pairs_max << "), longest crossing " << fixed(r.longest_crossing_ms, 0)
+      << " ms" << (r.longest_between.empty() ? "" : " (" + r.longest_between + ")") << "\n";
+  }
+  return s.str();
+}
+
+nlohmann::json to_json(const std::vector<PileRun>& runs) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const PileRun& r : runs)
+    out.push_back({{"seed", r.seed},
+                   {"level", static_cast<int>(r.level)},
+                   {"response", ffd::response_name(r.response)},
+                   {"steps", r.steps},
+                   {"sample_every_steps", r.sample_every},
+                   {"pairs", r.pairs},
+                   {"pairs_max", r.pairs_max},
+                   {"last_second_max", r.last_second_max},
+                   {"longest_crossing_ms", r.longest_crossing_ms},
+                   {"longest_between", r.longest_between},
+                   {"at_rest", r.at_rest},
+                   {"step_p50_ms", r.step_p50_ms},
+                   {"step_p99_ms", r.step_p99_ms},
+                   {"finite", r.finite},
+                   {"clean", r.clean()}});
+  return out;
+}
+
+}  // namespace ffdbench
