@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <initializer_list>
 
 #include "ffd/box_test.h"
 #include "ffd/closest_point.h"
@@ -321,6 +322,31 @@ bool closest_around(const Model& model, const State& state, Scratch& scratch, In
   return reliable;
 }
 
+// The corners and AABBs (by axis too) of cell_a's triangles as the lattice is now, into the
+// scratch arrays triangle_corners, triangle_min/max and triangle_lo/hi; false if some corner
+// is not finite.
+bool load_triangles(const Model& model, const State& state, Scratch& scratch, Index cell_a) {
+  const Index tri_begin = model.cell_triangle_begin[cell_a], tri_count = model.cell_triangle_begin[cell_a + 1] - tri_begin;
+  Vec3* corners = scratch.triangle_corners.data();
+  bool finite = true;
+  for (Index t = 0; t < tri_count; ++t) {
+    const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[tri_begin + t]];
+    for (int k = 0; k < 3; ++k) {
+      corners[3 * t + k] = cached_vertex(model, state, scratch, tri[k]);
+      finite = finite && is_finite(corners[3 * t + k]);
+    }
+    const Vec3 lo = corners[3 * t].cwiseMin(corners[3 * t + 1]).cwiseMin(corners[3 * t + 2]);
+    const Vec3 hi = corners[3 * t].cwiseMax(corners[3 * t + 1]).cwiseMax(corners[3 * t + 2]);
+    scratch.triangle_min[t] = lo;
+    scratch.triangle_max[t] = hi;
+    for (int k = 0; k < 3; ++k) {
+      scratch.triangle_lo[k][t] = lo[k];
+      scratch.triangle_hi[k][t] = hi[k];
+    }
+  }
+  return finite;
+}
+
 // Level 5, one half of a cell pair: the surface vertices of cell_b against the triangles
 // with a vertex in cell_a, as the lattice is now. A vertex is inside if it lies behind the
 // closest triangle of cell_a and of the cells around it, none of them inverted. The deepest
@@ -345,25 +371,9 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   if ((scratch.cell_vertex_max[cell_b].array() < reach_lo.array()).any() ||
       (scratch.cell_vertex_min[cell_b].array() > reach_hi.array()).any())
     return;
-  // The triangles' corners and AABBs (by axis too, for the filter below).
   const Index tri_count = tri_end - tri_begin;
-  Vec3* corners = scratch.triangle_corners.data();
-  bool corners_finite = true;
-  for (Index t = 0; t < tri_count; ++t) {
-    const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[tri_begin + t]];
-    for (int k = 0; k < 3; ++k) {
-      corners[3 * t + k] = cached_vertex(model, state, scratch, tri[k]);
-      corners_finite = corners_finite && is_finite(corners[3 * t + k]);
-    }
-    const Vec3 lo = corners[3 * t].cwiseMin(corners[3 * t + 1]).cwiseMin(corners[3 * t + 2]);
-    const Vec3 hi = corners[3 * t].cwiseMax(corners[3 * t + 1]).cwiseMax(corners[3 * t + 2]);
-    scratch.triangle_min[t] = lo;
-    scratch.triangle_max[t] = hi;
-    for (int k = 0; k < 3; ++k) {
-      scratch.triangle_lo[k][t] = lo[k];
-      scratch.triangle_hi[k][t] = hi[k];
-    }
-  }
+  const Vec3* corners = scratch.triangle_corners.data();
+  const bool corners_finite = load_triangles(model, state, scratch, cell_a);
   // (cached_vertex may have refreshed cell_b above: with the same values.)
   double deepest = 0.0;
   Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
@@ -433,6 +443,176 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   respond_pair<kFriction>(model, state, cell_a, cell_b, deepest_normal, deepest, false);
   invalidate_surface_around(model, scratch, cell_a);
   invalidate_surface_around(model, scratch, cell_b);
+}
+
+// Six times the signed volume of the tetrahedron (a, b, c, d): > 0 when d lies on the side of
+// the plane through a, b, c that (b - a) x (c - a) points to.
+double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
+
+// The open segment pq passes through triangle abc: its ends strictly on opposite sides of the
+// plane, and the line through them inside the triangle (edges included). A segment touching
+// the plane, or lying in it, does not count.
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double sp = orient(a, b, c, p), sq = orient(a, b, c, q);
+  if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
+  const double u = orient(p, q, a, b), v = orient(p, q, b, c), w = orient(p, q, c, a);
+  return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
+}
+
+// Surface vertex v as the lattice was at the start of the step.
+Vec3 start_vertex(const Model& model, const Scratch& scratch, Index v) {
+  const std::array<Index, 8>& corner = model.cell_nodes[model.surface_vertex_cell[v]];
+  return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return scratch.x_start[corner[j]]; });
+}
+
+// How an edge pq that crosses triangle abc now, and did not at the start of the step (p0 q0,
+// a0 b0 c0), is to go back: along `normal`, by `depth` (m). Through the face: the edge was
+// wholly on one side of the triangle's plane, and goes back to that side, by the depth of
+// its end furthest behind. Past one of the triangle's edges rs: the two lines passed through
+// each other (the sign of orient(p, q, r, s) changed); the edge goes back along their common
+// perpendicular to the side it was on. False if neither can be told.
+bool edge_way_back(const Vec3 (&now)[5], const Vec3 (&start)[5], Vec3& normal, double& depth) {
+  const Vec3 &p = now[0], &q = now[1];
+  const Vec3 &p0 = start[0], &q0 = start[1];
+  const double sp = orient(start[2], start[3], start[4], p0), sq = orient(start[2], start[3], start[4], q0);
+  if ((sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0)) {
+    const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+    const double length = face.norm();
+    if (!(length > 0.0)) return false;
+    normal = (sp > 0.0 ? 1.0 : -1.0) / length * face;
+    depth = std::max(-normal.dot(p - now[2]), -normal.dot(q - now[2]));
+    return depth > 0.0;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int r = 2 + k, t = 2 + (k + 1) % 3;
+    const double before = orient(p0, q0, start[r], start[t]), after = orient(p, q, now[r], now[t]);
+    if (!((before > 0.0 && after < 0.0) || (before < 0.0 && after > 0.0))) continue;
+    const Vec3 across = (q - p).cross(now[t] - now[r]);
+    const double length = across.norm();
+    if (!(length > 0.0)) return false;
+    // orient(p, q, r, s) = ((q - p) x (s - r)) . (p - r): the normal points from rs's line to
+    // pq's as it was at the start.
+    normal = (before > 0.0 ? 1.0 : -1.0) / length * across;
+    depth = -normal.dot(p - now[r]);
+    return depth > 0.0;
+  }
+  return false;
+}
+
+// The way out for an edge pq that crossed triangle abc (now[0..4]) before this step already,
+// so that how it got in is not known: out of the face it crosses, to the face's front
+// (outside the surface), by the depth of its end behind it, at most `reach` (the depth level
+// 5 sees a vertex at: a long edge through a face far from its ends is not pushed out in one
+// go). Not the nearest face, which for an edge past the middle of a thin part is the far one
+// and would push it through.
+bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& depth) {
+  const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+  const double length = face.norm();
+  if (!(length > 0.0)) return false;
+  normal = face / length;
+  depth = std::min(reach, std::max(-normal.dot(now[0] - now[2]), -normal.dot(now[1] - now[2])));
+  return depth > 0.0;
+}
+
+// Level 5, the edges of one half of a pair of cells of two objects: the edges of cell_b's
+// triangles against cell_a's triangles. Two surfaces can cross edge through edge with no
+// vertex behind the other (thin parts, sharp edges), and a vertex that has gone past the
+// middle of a thin part is nearest its far side and no longer behind (test_vertices). An edge
+// that crosses a triangle now and did not at the start of the step came in during the step,
+// and the start says from which side (edge_way_back); one that crossed already goes out of
+// the face it crosses (crossed_way_out). The deepest crossing moves the cells that carry the
+// edge's end and the triangle's corner nearest to it apart, once per pair half, as a vertex
+// contact moves its cells. Within one object edges are not tested: in thin parts (a plate
+// 3 mm thick in 1 cm cells) the pushes between a surface's own cells fed energy in (a random
+// pile's plate folded through itself, 16.5 J after 3 s against 0.04 J without them).
+template <bool kFriction>
+void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b, Index cell_a, StageCounters& counters,
+                double& max_depth) {
+  const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
+  const Index edge_begin = model.cell_edge_begin[cell_b], edge_end = model.cell_edge_begin[cell_b + 1];
+  if (tri_begin == tri_end || edge_begin == edge_end || cell_inverted(model, state, cell_a)) return;
+  // The edges lie in the AABB of cell_b's triangles: only where it meets cell_a's can an
+  // edge cross a triangle.
+  Vec3 reach_lo, reach_hi, edges_lo, edges_hi;
+  cell_triangle_bounds(model, state, scratch, cell_a, reach_lo, reach_hi);
+  cell_triangle_bounds(model, state, scratch, cell_b, edges_lo, edges_hi);
+  reach_lo = reach_lo.cwiseMax(edges_lo);
+  reach_hi = reach_hi.cwiseMin(edges_hi);
+  if ((reach_lo.array() > reach_hi.array()).any()) return;
+  // cell_a's triangles that reach into that region (all of them with a NaN about).
+  const bool finite = load_triangles(model, state, scratch, cell_a) && is_finite(reach_lo) && is_finite(reach_hi);
+  const Index tri_count = tri_end - tri_begin;
+  const Vec3* corners = scratch.triangle_corners.data();
+  Index* __restrict near = scratch.triangle_near.data();
+  Index candidates = 0;
+  for (Index t = 0; t < tri_count; ++t) {
+    near[candidates] = t;
+    candidates += static_cast<Index>(!finite || !((scratch.triangle_max[t].array() < reach_lo.array()).any() ||
+                                                  (scratch.triangle_min[t].array() > reach_hi.array()).any()));
+  }
+  if (candidates == 0) return;
+  double deepest = 0.0;
+  Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
+  Index carrier_a = cell_a, carrier_b = cell_b;
+  for (Index e = edge_begin; e < edge_end; ++e) {
+    const std::array<Index, 2>& edge = model.cell_edges[e];
+    const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
+    const Vec3 q = cached_vertex(model, state, scratch, edge[1]);
+    const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
+    // (A NaN compares false both ways: such an edge is tested, and crosses nothing.)
+    if ((hi.array() < reach_lo.array()).any() || (lo.array() > reach_hi.array()).any()) continue;
+    counters.node_tests += candidates;
+    for (Index c = 0; c < candidates; ++c) {
+      const Index t = near[c];
+      if ((hi.array() < scratch.triangle_min[t].array()).any() || (lo.array() > scratch.triangle_max[t].array()).any())
+        continue;
+      const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[tri_begin + t]];
+      const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
+      if (!segment_crosses_triangle(p, q, now[2], now[3], now[4])) continue;
+      const Vec3 start[5] = {start_vertex(model, scratch, edge[0]), start_vertex(model, scratch, edge[1]),
+                             start_vertex(model, scratch, tri[0]), start_vertex(model, scratch, tri[1]),
+                             start_vertex(model, scratch, tri[2])};
+      Vec3 normal;
+      double depth = 0.0;
+      if (segment_crosses_triangle(start[0], start[1], start[2], start[3], start[4])) {
+        if (!crossed_way_out(now, model.surface_contact_radius, normal, depth)) continue;
+      } else if (!edge_way_back(now, start, normal, depth)) {
+        continue;
+      }
+      if (!(depth > deepest)) continue;
+      deepest = depth;
+      deepest_normal = normal;
+      // Where the edge meets the triangle's plane, and the cells that carry the two there:
+      // the edge's end and the triangle's corner nearest to it (a long edge's ends, and so
+      // what moves it, may be cells away from the pair's cells).
+      const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+      const double hp = face.dot(p - now[2]), hq = face.dot(q - now[2]);
+      deepest_point = hp != hq ? Vec3(p + hp / (hp - hq) * (q - p)) : Vec3(0.5 * (p + q));
+      const auto nearest = [&](std::initializer_list<Index> vertices, std::initializer_list<Vec3> at) {
+        Index best = *vertices.begin();
+        double best_sq = INFINITY;
+        auto v = vertices.begin();
+        for (const Vec3& x : at) {
+          const double d_sq = (x - deepest_point).squaredNorm();
+          if (d_sq < best_sq) {
+            best_sq = d_sq;
+            best = *v;
+          }
+          ++v;
+        }
+        return model.surface_vertex_cell[best];
+      };
+      carrier_b = nearest({edge[0], edge[1]}, {p, q});
+      carrier_a = nearest({tri[0], tri[1], tri[2]}, {now[2], now[3], now[4]});
+    }
+  }
+  if (!(deepest > 0.0)) return;
+  ++counters.inter_contacts;
+  max_depth = std::max(max_depth, deepest);
+  scratch.record_contact(deepest_point, deepest_normal, deepest, ContactKind::Inter);
+  respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest, false);  // no rebound: as test_vertices
+  invalidate_surface_around(model, scratch, carrier_a);
+  invalidate_surface_around(model, scratch, carrier_b);
 }
 
 }  // namespace
@@ -643,6 +823,10 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
     else ++counters.inter_pairs_tested;
     test_vertices<kFriction>(model, state, scratch, c1, c2, same_object, counters, max_depth);
     test_vertices<kFriction>(model, state, scratch, c2, c1, same_object, counters, max_depth);
+    if (!same_object) {  // between objects only (test_edges)
+      test_edges<kFriction>(model, state, scratch, c1, c2, counters, max_depth);
+      test_edges<kFriction>(model, state, scratch, c2, c1, counters, max_depth);
+    }
   }
 }
 

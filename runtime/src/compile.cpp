@@ -71,6 +71,21 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
     sources[c].erase(std::unique(sources[c].begin(), sources[c].end()), sources[c].end());
   }
   flatten(sources, model.cell_triangle_source_begin, model.cell_triangle_sources);
+  // Per cell, the edges of its triangles, each once: an edge crossing another surface inside
+  // the cell is tested when the cell's box meets that surface's.
+  model.cell_edge_begin.push_back(0);
+  std::vector<std::array<Index, 2>> edges;
+  for (const auto& row : cell_triangles) {
+    edges.clear();
+    for (Index t : row) {
+      const std::array<Index, 3>& tri = model.surface_triangles[t];
+      for (int k = 0; k < 3; ++k) edges.push_back({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])});
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    model.cell_edges.insert(model.cell_edges.end(), edges.begin(), edges.end());
+    model.cell_edge_begin.push_back(static_cast<Index>(model.cell_edges.size()));
+  }
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
 }
 

@@ -99,6 +99,7 @@ Scratch make_scratch(const Model& model) {
     s.object_answered.resize(model.objects.size());
   }
   s.x_prev.resize(model.node_count());
+  s.x_start.resize(model.node_count());
   s.node_stamp.assign(model.node_count(), 0);
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());
@@ -202,6 +203,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
+  if (level.exact) std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (scratch.pool) scratch.pool->begin_step();
   for (Stage stage : model.pipeline) {
     if (stage == Stage::ContactSolve && !solver) continue;  // not run: its time stays -1

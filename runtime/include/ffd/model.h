@@ -164,6 +164,10 @@ struct Model {
   // (C + 1) per cell, the cells the corners of its triangles are bound to: what its
   // triangles move with.
   std::vector<Index> cell_triangle_source_begin, cell_triangle_sources;
+  // (C + 1) per cell, the edges of its triangles (each once, lower vertex index first): the
+  // edges tested against other cells' triangles.
+  std::vector<Index> cell_edge_begin;
+  std::vector<std::array<Index, 2>> cell_edges;
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
   std::uint32_t sleep_steps = 0;         // "sleeping": sleep_time in steps (>= 1)
 
