@@ -72,5 +72,9 @@ TEST_CASE("Pile runner: surfaces held crossed stay crossed to the end; apart and
     CHECK(json[0]["clean"] == true);
     CHECK(json[0]["pairs"].size() == 5);
     CHECK(ffdbench::markdown_piles({run}, "test CPU", 2).find("| paper | 2 ") != std::string::npos);
+    CHECK(ffdbench::markdown_unclean_piles({run}).empty());
+    ffdbench::PileRun crossed = run;
+    crossed.last_second_max = 3;
+    CHECK(ffdbench::markdown_unclean_piles({run, crossed}).find("3 pairs in the last second") != std::string::npos);
   }
 }

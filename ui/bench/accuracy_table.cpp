@@ -7,7 +7,6 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "ffd/command.h"
 #include "ffd/measure.h"
 #include "ffd/step.h"
 #include "ffd/surface_intersections.h"
@@ -27,12 +26,7 @@ constexpr double kRestSpeed = 0.05;  // m/s
 double resting_gap(const ffd::Model& model, const ffd::State& state, const ffd::SurfaceContactReport& contacts) {
   double worst = -1.0;
   for (const ffd::ObjectModel& object : model.objects) {
-    double kinetic = 0.0, mass = 0.0;  // 2 x J, kg
-    for (ffd::Index n = object.node_begin; n < object.node_end; ++n) {
-      kinetic += model.node_mass[n] * state.v[n].squaredNorm();
-      mass += model.node_mass[n];
-    }
-    if (!(kinetic <= mass * kRestSpeed * kRestSpeed)) continue;
+    if (!(rms_speed(model, state, object) <= kRestSpeed)) continue;
     // What it rests on is what it is nearest to; nothing within the search radius counts as
     // a gap of that radius (a lower bound).
     double nearest = contacts.search_radius_m;
@@ -50,16 +44,7 @@ AccuracyRun run_accuracy(const ffd::Model& model, const std::string& scene, ffd:
   run.level = level;
   run.response = response;
   run.steps = steps;
-  ffd::State state = ffd::initial_state(model);
-  const ffd::State initial = state;
-  // The level and the response are switched as commands would switch them: the path a user takes.
-  ffd::Command command;
-  command.kind = ffd::CommandKind::SetAccuracy;
-  command.value = static_cast<double>(level);
-  ffd::apply_command(model, initial, state, command);
-  command.kind = ffd::CommandKind::SetResponse;
-  command.value = static_cast<double>(response);
-  ffd::apply_command(model, initial, state, command);
+  ffd::State state = initial_state_at(model, level, response);
   ffd::Scratch scratch = ffd::make_scratch(model);
   ffd::WorkerPool pool(threads);
   ffd::attach_pool(model, scratch, pool);

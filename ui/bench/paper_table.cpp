@@ -69,6 +69,28 @@ std::string fixed(double value, int decimals) {
   return buffer;
 }
 
+ffd::State initial_state_at(const ffd::Model& model, ffd::Accuracy level, ffd::ContactResponse response) {
+  ffd::State state = ffd::initial_state(model);
+  const ffd::State initial = state;
+  ffd::Command command;
+  command.kind = ffd::CommandKind::SetAccuracy;
+  command.value = static_cast<double>(level);
+  ffd::apply_command(model, initial, state, command);
+  command.kind = ffd::CommandKind::SetResponse;
+  command.value = static_cast<double>(response);
+  ffd::apply_command(model, initial, state, command);
+  return state;
+}
+
+double rms_speed(const ffd::Model& model, const ffd::State& state, const ffd::ObjectModel& object) {
+  double kinetic = 0.0, mass = 0.0;  // 2 x J, kg
+  for (ffd::Index n = object.node_begin; n < object.node_end; ++n) {
+    kinetic += model.node_mass[n] * state.v[n].squaredNorm();
+    mass += model.node_mass[n];
+  }
+  return std::sqrt(kinetic / mass);
+}
+
 namespace {
 
 // One run of `model`: warm-up, measured window; box sets recorded when `record` is set.

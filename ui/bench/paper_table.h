@@ -83,6 +83,11 @@ double percentile(std::vector<double> values, double p);  // nearest rank, of a 
 double mean(const std::vector<double>& values);
 std::int64_t stage(const ffd::StepReport& report, ffd::Stage s);  // ns, 0 for a stage not run
 std::string fixed(double value, int decimals);
+// The model's initial state switched to `level` and `response` by commands, the path a
+// user's commands take.
+ffd::State initial_state_at(const ffd::Model& model, ffd::Accuracy level, ffd::ContactResponse response);
+// An object's lattice nodes' RMS speed, mass-weighted (its kinetic energy as a speed), m/s.
+double rms_speed(const ffd::Model& model, const ffd::State& state, const ffd::ObjectModel& object);
 
 // "Intel(R) Xeon(R) ... (2 cores)" from /proc/cpuinfo, or "unknown CPU".
 std::string cpu_description();

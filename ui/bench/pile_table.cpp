@@ -6,7 +6,6 @@
 #include <sstream>
 #include <utility>
 
-#include "ffd/command.h"
 #include "ffd/step.h"
 #include "ffd/surface_intersections.h"
 #include "ffd/worker_pool.h"
@@ -18,14 +17,8 @@ namespace {
 constexpr double kRestSpeed = 0.05;  // m/s, RMS lattice-node speed of an object at rest (as accuracy_table.cpp)
 
 bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
-  for (const ffd::ObjectModel& object : model.objects) {
-    double kinetic = 0.0, mass = 0.0;  // 2 x J, kg
-    for (ffd::Index n = object.node_begin; n < object.node_end; ++n) {
-      kinetic += model.node_mass[n] * state.v[n].squaredNorm();
-      mass += model.node_mass[n];
-    }
-    if (!(kinetic <= mass * kRestSpeed * kRestSpeed)) return false;
-  }
+  for (const ffd::ObjectModel& object : model.objects)
+    if (!(rms_speed(model, state, object) <= kRestSpeed)) return false;
   return true;
 }
 
@@ -39,15 +32,7 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
   run.response = response;
   run.steps = steps;
   run.sample_every = sample_every;
-  ffd::State state = ffd::initial_state(model);
-  const ffd::State initial = state;
-  ffd::Command command;  // level and response switched as a user's commands switch them
-  command.kind = ffd::CommandKind::SetAccuracy;
-  command.value = static_cast<double>(level);
-  ffd::apply_command(model, initial, state, command);
-  command.kind = ffd::CommandKind::SetResponse;
-  command.value = static_cast<double>(response);
-  ffd::apply_command(model, initial, state, command);
+  ffd::State state = initial_state_at(model, level, response);
   ffd::Scratch scratch = ffd::make_scratch(model);
   ffd::WorkerPool pool(threads);
   ffd::attach_pool(model, scratch, pool);
@@ -148,10 +133,15 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
                         : std::string("none"))
       << " | " << fixed(p50 / static_cast<double>(count), 3) << " / " << fixed(p99, 3) << " ms |\n";
   }
+  return s.str();
+}
+
+std::string markdown_unclean_piles(const std::vector<PileRun>& runs) {
+  std::ostringstream s;
   bool header = false;
   for (const PileRun& r : runs) {
     if (r.clean()) continue;
-    if (!header) s << "\nPiles that are not clean:\n\n";
+    if (!header) s << "Piles that are not clean:\n\n";
     header = true;
     s << "- pile " << r.seed << ", " << ffd::response_name(r.response) << " level " << static_cast<int>(r.level) << ": "
       << (r.finite ? "" : "NOT FINITE; ") << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max

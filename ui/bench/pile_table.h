@@ -40,8 +40,9 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
                  std::uint64_t steps, std::uint64_t sample_every, const Progress& progress, int threads = 1);
 
 // Markdown: a row per response and level over all seeds (clean piles, pairs, longest crossing,
-// step time), then the piles that are not clean.
+// step time); and a line per run that is not clean (empty if none).
 std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& cpu, int objects);
+std::string markdown_unclean_piles(const std::vector<PileRun>& runs);
 nlohmann::json to_json(const std::vector<PileRun>& runs);
 
 }  // namespace ffdbench

@@ -89,7 +89,8 @@ int run_piles_command(const PilesOptions& o) {
 
     const std::string table = ffdbench::markdown_piles(runs, ffdbench::cpu_description(), o.objects);
     const std::filesystem::path out(o.out_dir);
-    write_file(out / "piles.md", "## Random piles\n\n" + table);
+    const std::string unclean = ffdbench::markdown_unclean_piles(runs);
+    write_file(out / "piles.md", "## Random piles\n\n" + table + (unclean.empty() ? "" : "\n" + unclean));
     write_file(out / "piles.json",
                nlohmann::json({{"machine", {{"cpu", ffdbench::cpu_description()}}},
                                {"date", today()},
@@ -97,7 +98,7 @@ int run_piles_command(const PilesOptions& o) {
                                {"runs", ffdbench::to_json(runs)}})
                        .dump(2) +
                    "\n");
-    std::printf("%s", table.c_str());
+    std::printf("%s%s", table.c_str(), unclean.empty() ? "" : ("\n" + unclean).c_str());
     if (!o.readme.empty()) {
       write_file(o.readme, replace_section(readme_text, o.readme, "piles:table", table));
       std::fprintf(stderr, "ffdsim piles: updated %s\n", o.readme.c_str());
