@@ -204,9 +204,11 @@ void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch
   }
 }
 
-Vec3 surface_vertex(const Model& model, const State& state, Index v) {
+// Surface vertex v (eq. 2) on the lattice nodes at `x`: the lattice now (State::x) or as the
+// step found it (Scratch::x_start).
+Vec3 surface_vertex(const Model& model, const std::vector<Vec3>& x, Index v) {
   const std::array<Index, 8>& corner = model.cell_nodes[model.surface_vertex_cell[v]];
-  return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
+  return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return x[corner[j]]; });
 }
 
 // Maps the surface vertices of `cell` (and their AABB) into the level-5 cache.
@@ -214,7 +216,7 @@ void refresh_cell_vertices(const Model& model, const State& state, Scratch& scra
   Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
   for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
     const Index v = model.cell_vertices[i];
-    const Vec3 p = surface_vertex(model, state, v);
+    const Vec3 p = surface_vertex(model, state.x, v);
     scratch.surface_x[v] = p;
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
@@ -459,12 +461,6 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const
   return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
 }
 
-// Surface vertex v as the lattice was at the start of the step.
-Vec3 start_vertex(const Model& model, const Scratch& scratch, Index v) {
-  const std::array<Index, 8>& corner = model.cell_nodes[model.surface_vertex_cell[v]];
-  return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return scratch.x_start[corner[j]]; });
-}
-
 // How an edge pq that crosses triangle abc now, and did not at the start of the step (p0 q0,
 // a0 b0 c0), is to go back: along `normal`, by `depth` (m). Through the face: the edge was
 // wholly on one side of the triangle's plane, and goes back to that side, by the depth of
@@ -572,9 +568,10 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
       const std::array<Index, 3>& tri = model.surface_triangles[model.cell_triangles[tri_begin + t]];
       const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
       if (!segment_crosses_triangle(p, q, now[2], now[3], now[4])) continue;
-      const Vec3 start[5] = {start_vertex(model, scratch, edge[0]), start_vertex(model, scratch, edge[1]),
-                             start_vertex(model, scratch, tri[0]), start_vertex(model, scratch, tri[1]),
-                             start_vertex(model, scratch, tri[2])};
+      const std::vector<Vec3>& x0 = scratch.x_start;
+      const Vec3 start[5] = {surface_vertex(model, x0, edge[0]), surface_vertex(model, x0, edge[1]),
+                             surface_vertex(model, x0, tri[0]), surface_vertex(model, x0, tri[1]),
+                             surface_vertex(model, x0, tri[2])};
       Vec3 normal;
       double depth = 0.0;
       if (segment_crosses_triangle(start[0], start[1], start[2], start[3], start[4])) {
@@ -870,7 +867,7 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
       };
       if (level.exact) {
         for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i)
-          consider(surface_vertex(model, state, model.cell_vertices[i]));
+          consider(surface_vertex(model, state.x, model.cell_vertices[i]));
         counters.node_tests += model.cell_vertex_begin[cell + 1] - model.cell_vertex_begin[cell];
       } else {
         for (int k = 0; k < node_count; ++k) consider(tested_node(model, level, state, scratch, b, k));

@@ -203,7 +203,9 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
-  if (level.exact) std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
+  // Level 5's edge contacts (paper's response only) read where the step started.
+  if (level.exact && state.params.response == ContactResponse::Paper)
+    std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (scratch.pool) scratch.pool->begin_step();
   for (Stage stage : model.pipeline) {
     if (stage == Stage::ContactSolve && !solver) continue;  // not run: its time stays -1

@@ -1,6 +1,7 @@
 #include "bench/pile_table.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -51,7 +52,8 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
       run.longest_between = model.objects[objects.first].name + " / " + model.objects[objects.second].name;
     }
   };
-  const std::uint64_t last_second_from = steps > 1000 ? steps - 1000 : 0;
+  const auto steps_per_second = static_cast<std::uint64_t>(std::llround(1.0 / model.settings.dt));
+  const std::uint64_t last_second_from = steps > steps_per_second ? steps - steps_per_second : 0;
   const std::string what = "pile " + std::to_string(seed) + ": level " + std::to_string(static_cast<int>(level)) + ", " +
                            ffd::response_name(response);
   const std::uint64_t report_every = std::max<std::uint64_t>(1, steps / 100);

@@ -150,8 +150,9 @@ struct Scratch {
   WorkerPool* pool = nullptr;
   // Dynamics.
   std::vector<Vec3> x_prev;        // positions at the start of the step
-  // Level 5 only: the lattice as the step found it, before dynamics and responses; which side
-  // of a triangle an edge came from (collision.cpp, test_edges).
+  // Level 5 under the paper's response only: the lattice as the step found it, before
+  // dynamics and responses; which side of a triangle an edge came from (collision.cpp,
+  // test_edges).
   std::vector<Vec3> x_start;
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
   std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
