@@ -247,6 +247,28 @@ TEST_CASE("Device URLs: udp://HOST:PORT, loopback unless allowed", "[device]") {
   CHECK_THROWS_WITH(DeviceLink(remote), Catch::Contains("--device-allow-remote"));
 }
 
+TEST_CASE("Sequence order: after a silence any number starts afresh; one not far ahead counts its gaps", "[device]") {
+  SequenceOrder order(20'000'000);  // 20 ms
+  std::uint32_t skipped = 99;
+  CHECK(order.take(10, 0, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 0);
+  CHECK(order.take(13, 1'000'000, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 2);
+  // 50 ms silent (the bridge, or this thread not scheduled): 14..16 were lost all the same.
+  CHECK(order.take(17, 51'000'000, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 3);
+  CHECK(order.take(16, 52'000'000, skipped) == SequenceOrder::Verdict::OutOfOrder);
+  // A restarted bridge counts from 0: taken, no gap.
+  CHECK(order.take(0, 100'000'000, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 0);
+  CHECK(order.take(0, 101'000'000, skipped) == SequenceOrder::Verdict::Duplicate);
+  // One far ahead after a silence is a new count, not 10^6 lost samples.
+  CHECK(order.take(1'000'000, 200'000'000, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 0);
+  CHECK(order.take(1'000'002, 201'000'000, skipped) == SequenceOrder::Verdict::Taken);
+  CHECK(skipped == 1);
+}
+
 TEST_CASE("Device link: samples in order are interpolated; duplicates, late and malformed ones are counted, never applied",
           "[device]") {
   LinkSettings settings;

@@ -70,10 +70,14 @@ std::uint64_t LinkCounters::malformed_total() const {
 
 SequenceOrder::Verdict SequenceOrder::take(std::uint32_t sequence, std::int64_t arrival_ns, std::uint32_t& skipped) {
   skipped = 0;
+  const std::int32_t ahead = static_cast<std::int32_t>(sequence - last_);
   if (started_ && arrival_ns - last_arrival_ns_ <= restart_after_ns_) {
-    const std::int32_t ahead = static_cast<std::int32_t>(sequence - last_);
     if (ahead == 0) return Verdict::Duplicate;
     if (ahead < 0) return Verdict::OutOfOrder;
+    skipped = static_cast<std::uint32_t>(ahead - 1);
+  } else if (started_ && ahead > 0 && ahead <= kCountedAfterSilence) {
+    // The same bridge went on counting through the silence (or this thread was not scheduled
+    // for a while): the numbers passed over were lost all the same.
     skipped = static_cast<std::uint32_t>(ahead - 1);
   }
   started_ = true;

@@ -47,7 +47,8 @@ void parse_device_url(const std::string& url, LinkSettings& settings);
 
 // Which samples the link takes: each newer than the last taken (serial-number arithmetic, so
 // the 32-bit sequence may wrap); after a silence longer than `restart_after_ns` any sequence
-// starts anew (a bridge that restarted counts from 0). The I/O thread's rule, on its own so
+// starts anew (a bridge that restarted counts from 0), and one at most a minute of 1 kHz
+// samples ahead counts the numbers it passed over as gaps. The I/O thread's rule, on its own so
 // that the tests and the fuzzer drive it without a socket.
 class SequenceOrder {
  public:
@@ -55,6 +56,7 @@ class SequenceOrder {
   explicit SequenceOrder(std::int64_t restart_after_ns) : restart_after_ns_(restart_after_ns) {}
   // `skipped`: sequence numbers passed over by a taken sample (lost, or coming later).
   Verdict take(std::uint32_t sequence, std::int64_t arrival_ns, std::uint32_t& skipped);
+  static constexpr std::int32_t kCountedAfterSilence = 60'000;
 
  private:
   std::int64_t restart_after_ns_;
