@@ -495,6 +495,11 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
   // Clamped: sleep_time / dt is finite for a valid scene, but need not fit 32 bits.
   model.sleep_steps = static_cast<std::uint32_t>(
       std::clamp(std::ceil(model.settings.sleep_time / model.settings.dt), 1.0, 4.0e9));
+  if (model.settings.box_overlap) {
+    double finest = INFINITY;
+    for (const ObjectModel& object : model.objects) finest = std::min(finest, object.cell_size);
+    model.box_skin = std::isfinite(finest) ? kBoxSkinShare * finest : 0.0;
+  }
   warn_about_start_overlaps(model, log);
   return model;
 }

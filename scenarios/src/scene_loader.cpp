@@ -37,7 +37,7 @@ const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
     "effects", "hash_table_size", "hash_cell_size", "min_box_thickness", "accuracy", "sub_box_split",
-    "sleep_radius", "sleep_time", "response", "rolling_resistance"};
+    "sleep_radius", "sleep_time", "response", "rolling_resistance", "box_overlap"};
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
     "name",         "mesh",          "shape",          "glyph",          "size",
@@ -135,6 +135,7 @@ class SceneReader {
         sim.integer("accuracy", static_cast<int>(settings.accuracy), 0, kAccuracyLevels - 1));
     settings.sub_box_split = static_cast<int>(sim.integer("sub_box_split", settings.sub_box_split, 2, 4));
     settings.rolling_resistance = sim.number("rolling_resistance", settings.rolling_resistance, kNonNegative);
+    settings.box_overlap = sim.boolean("box_overlap", settings.box_overlap);
     if (const std::optional<std::string> response = sim.string("response"))
       if (!response_from_name(*response, settings.response))
         sim.fail_at("response", "unknown response " + in_quotes(*response) + " (valid: \"paper\", \"solver\")");

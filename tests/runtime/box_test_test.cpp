@@ -146,3 +146,44 @@ TEST_CASE("a node moving into a thin box takes the face it came through", "[narr
   // At rest relative to the box: eq. 7.
   CHECK(node_in_box(p, node, Vec3::Zero(), 2 * dt).face == 0);
 }
+
+TEST_CASE("two thin boxes crossed like an X overlap with no corner in the other, and part along their thinnest way",
+          "[narrow_phase]") {
+  // Plate a: 1 x 0.1 x 1, lying flat; plate b: 0.1 x 1 x 1 standing, through a's edge region
+  // (x in [0.05, 0.15]), reaching 0.45 above and below it.
+  const BoxNodes a = unit_box(Vec3::Zero(), Vec3(1.0, 0.1, 1.0));
+  const BoxNodes b = unit_box(Vec3(0.05, -0.45, 0.0), Vec3(0.1, 1.0, 1.0));
+  const BoxPlanes pa = box_planes(a), pb = box_planes(b);
+  for (const Vec3& corner : a) CHECK_FALSE(node_in_box(pb, corner).inside);
+  for (const Vec3& corner : b) CHECK_FALSE(node_in_box(pa, corner).inside);
+  const BoxOverlap o = box_overlap(pa, a.data(), 8, pb, b.data(), 8);
+  REQUIRE(o.overlapping);
+  // Least: b out past a's -x face, 0.15 (its other ways: 0.55 down, 0.95 right, 1 along z).
+  CHECK(o.depth == Approx(0.15));
+  CHECK((o.normal - (-Vec3::UnitX())).norm() < 1e-12);
+  // b coming down into a at 1 m/s takes the way it came in: back up, its bottom from 0.45
+  // below a's bottom face to a's top face, 0.55.
+  const BoxOverlap falling = box_overlap(pa, a.data(), 8, pb, b.data(), 8, 0.0, Vec3(0.0, -1.0, 0.0), 1.0);
+  REQUIRE(falling.overlapping);
+  CHECK((falling.normal - Vec3::UnitY()).norm() < 1e-12);
+  CHECK(falling.depth == Approx(0.55));
+  // An entry longer ago than `recent` says nothing: the least depth again.
+  CHECK(box_overlap(pa, a.data(), 8, pb, b.data(), 8, 0.0, Vec3(0.0, -1.0, 0.0), 0.1).depth == Approx(0.15));
+}
+
+TEST_CASE("box overlap: apart is apart, and a skin makes boxes close by overlap by the rest of it", "[narrow_phase]") {
+  const BoxNodes a = unit_box();
+  const BoxNodes b = unit_box(Vec3(0.0, 1.04, 0.0));  // 0.04 above a
+  const BoxPlanes pa = box_planes(a), pb = box_planes(b);
+  CHECK_FALSE(box_overlap(pa, a.data(), 8, pb, b.data(), 8).overlapping);
+  CHECK_FALSE(box_overlap(pa, a.data(), 8, pb, b.data(), 8, 0.04).overlapping);  // exactly the skin apart
+  const BoxOverlap o = box_overlap(pa, a.data(), 8, pb, b.data(), 8, 0.1);
+  REQUIRE(o.overlapping);
+  CHECK(o.depth == Approx(0.06));
+  CHECK((o.normal - Vec3::UnitY()).norm() < 1e-12);
+  // NaN nodes never overlap.
+  test::FpTrapsOff no_traps;
+  BoxNodes bad = b;
+  bad[3].x() = std::nan("");
+  CHECK_FALSE(box_overlap(pa, a.data(), 8, pb, bad.data(), 8, 0.1).overlapping);
+}

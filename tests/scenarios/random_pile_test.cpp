@@ -31,6 +31,12 @@ TEST_CASE("a random pile is the same for the same seed and differs between seeds
   CHECK(ffd::random_pile_scene(options) == first);
   options.seed = 8;
   CHECK(ffd::random_pile_scene(options) != first);
+  // box_overlap is written only when asked for, and read back.
+  CHECK(first.find("box_overlap") == std::string::npos);
+  options.seed = 7;
+  options.box_overlap = true;
+  CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.box_overlap);
+  options.box_overlap = false;
   options.objects = 0;
   CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
   options.objects = 6;

@@ -354,13 +354,13 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
     require_error(
         "[simulation]\neffects = []\nwind = 3\n",
         "inline.toml:3:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap)");
   }
   SECTION("the first unknown key in file order is reported") {
     require_error(
         "[simulation]\nwind = 1\neffects = []\nalpha_ = 1\n",
         "inline.toml:2:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap)");
   }
   SECTION("a key that is the start of a valid one") {
     require_error(scene_with_object("name = \"a\"\nrotation = [0, 45, 0]\n"),
@@ -1223,4 +1223,10 @@ TEST_CASE("simulation.response picks the contact response, and an unknown one na
   CHECK(parse(head + "\"solver\"" + tail).settings.rolling_resistance == 0.2);
   CHECK_THROWS_WITH(parse(rolling + "-0.1" + tail),
                     "inline.toml:3:22: simulation.rolling_resistance: must be >= 0 (got -0.1)");
+  // box_overlap: off unless asked for; a boolean.
+  const std::string overlap = "[simulation]\neffects = [\"planes\"]\nbox_overlap = ";
+  CHECK_FALSE(parse(head + "\"paper\"" + tail).settings.box_overlap);
+  CHECK(parse(overlap + "true" + tail).settings.box_overlap);
+  CHECK_FALSE(parse(overlap + "false" + tail).settings.box_overlap);
+  CHECK_THROWS_WITH(parse(overlap + "1" + tail), "inline.toml:3:15: simulation.box_overlap: expected true or false (got an integer)");
 }

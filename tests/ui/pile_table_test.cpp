@@ -72,6 +72,12 @@ TEST_CASE("Pile runner: surfaces held crossed stay crossed to the end; apart and
     CHECK(json[0]["clean"] == true);
     CHECK(json[0]["pairs"].size() == 5);
     CHECK(ffdbench::markdown_piles({run}, "test CPU", 2).find("| paper | 2 ") != std::string::npos);
+    CHECK(json[0]["box_overlap"] == false);
+    ffdbench::PileRun overlapping = run;  // a scene with box_overlap gets rows of its own
+    overlapping.box_overlap = true;
+    const std::string both = ffdbench::markdown_piles({run, overlapping}, "test CPU", 2);
+    CHECK(both.find("| paper | 2 ") != std::string::npos);
+    CHECK(both.find("| paper + box_overlap | 2 ") != std::string::npos);
     CHECK(ffdbench::markdown_unclean_piles({run}).empty());
     ffdbench::PileRun crossed = run;
     crossed.last_second_max = 3;

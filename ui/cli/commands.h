@@ -126,6 +126,7 @@ struct PilesOptions {
   std::vector<std::string> responses = {"paper", "solver"};
   std::string out_dir = "out/piles";
   std::string scenes_dir;            // also write each pile's scene file here
+  bool box_overlap = false;          // every pile with [simulation] box_overlap = true
   std::string readme;                // Markdown file whose piles section is replaced
   int threads = 0;
   bool quiet = false;

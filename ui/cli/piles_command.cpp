@@ -34,6 +34,8 @@ void register_piles(CLI::App& app, PilesOptions& o) {
   cmd->add_option("--out", o.out_dir, "Folder for piles.md and piles.json")->capture_default_str();
   cmd->add_option("--scenes", o.scenes_dir, "Also write each pile's scene file (pile_SEED.toml) into this folder");
   cmd->add_option("--update-readme", o.readme, "Also replace the <!-- piles:table:begin --> section of this file");
+  cmd->add_flag("--box-overlap", o.box_overlap,
+                "Every pile with [simulation] box_overlap = true (boxes of two objects kept apart as wholes)");
   add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
 }
@@ -61,6 +63,7 @@ int run_piles_command(const PilesOptions& o) {
       ffd::PileOptions pile;
       pile.seed = seed;
       pile.objects = o.objects;
+      pile.box_overlap = o.box_overlap;
       const std::string text = ffd::random_pile_scene(pile);
       const std::string origin = "pile_" + std::to_string(seed) + ".toml";
       if (!o.scenes_dir.empty()) write_file(std::filesystem::path(o.scenes_dir) / origin, text);

@@ -145,4 +145,69 @@ inline NodeInBox node_in_box(const BoxPlanes& planes, const Vec3& p, const Vec3&
   return result;
 }
 
+// How far two point sets' hulls overlap along the twelve face normals of two boxes (the
+// separating-axis test on those axes): a box's 8 corners, or the surface points inside it.
+// `normal` points from a towards b, and moving b by depth along it (or a by depth against it)
+// parts them along that axis, `skin` apart.
+struct BoxOverlap {
+  bool overlapping = false;
+  Vec3 normal = Vec3::Zero();
+  double depth = 0.0;  // m
+};
+
+inline BoxOverlap box_overlap(const BoxPlanes& planes_a, const Vec3* a, int count_a, const BoxPlanes& planes_b,
+                              const Vec3* b, int count_b, double skin = 0.0, const Vec3& relative_velocity = Vec3::Zero(),
+                              double recent = 0.0) {
+  BoxOverlap result;
+  double least = INFINITY;
+  double best_time = recent;  // the axis b came in along last, as node_in_box chooses a face
+  Vec3 entered = Vec3::Zero();
+  double entered_depth = 0.0;
+  for (int axis = 0; axis < 12; ++axis) {
+    const Vec3& n = axis < 6 ? planes_a.normal[axis] : planes_b.normal[axis - 6];
+    if (n.squaredNorm() == 0.0) continue;  // a degenerate face
+    double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
+    for (int k = 0; k < count_a; ++k) {
+      const double p = n.dot(a[k]);
+      if (std::isnan(p)) return BoxOverlap{};  // min and max would pass over it
+      lo_a = std::min(lo_a, p);
+      hi_a = std::max(hi_a, p);
+    }
+    for (int k = 0; k < count_b; ++k) {
+      const double p = n.dot(b[k]);
+      if (std::isnan(p)) return BoxOverlap{};
+      lo_b = std::min(lo_b, p);
+      hi_b = std::max(hi_b, p);
+    }
+    const double b_along = hi_a + skin - lo_b, b_against = hi_b + skin - lo_a;  // b's move along +n, -n
+    if (!(b_along > 0.0) || !(b_against > 0.0)) return BoxOverlap{};  // a separating axis
+    if (b_along < least) {
+      least = b_along;
+      result.normal = n;
+    }
+    if (b_against < least) {
+      least = b_against;
+      result.normal = -n;
+    }
+    const double approach = n.dot(relative_velocity);  // > 0: b moving along +n into a
+    if (approach < -kMinApproachSpeed && b_along / -approach < best_time) {
+      best_time = b_along / -approach;
+      entered = n;
+      entered_depth = b_along;
+    } else if (approach > kMinApproachSpeed && b_against / approach < best_time) {
+      best_time = b_against / approach;
+      entered = -n;
+      entered_depth = b_against;
+    }
+  }
+  if (least == INFINITY) return BoxOverlap{};
+  result.overlapping = true;
+  result.depth = least;
+  if (entered.squaredNorm() > 0.0) {
+    result.normal = entered;
+    result.depth = entered_depth;
+  }
+  return result;
+}
+
 }  // namespace ffd

@@ -146,6 +146,11 @@ struct SimulationSettings {
   // Off where beta = 0: a frictionless contact has no grip.
   double rolling_resistance = 0.2;
   int sub_box_split = 2;                 // k of accuracy level 4, [2, 4]
+  // Levels 0-4 under the paper's response: two boxes of different objects are also kept
+  // apart as wholes (the separating axes of their faces), with a skin of 1 % of the finer
+  // cell size between them, where testing their nodes alone lets two thin boxes cross like
+  // an X (README, "Random piles").
+  bool box_overlap = false;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
   // sleep_radius of one point for sleep_time falls asleep (runtime/src/sleep.h).

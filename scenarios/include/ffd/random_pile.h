@@ -17,6 +17,7 @@ struct PileOptions {
   int min_cells = 3, max_cells = 12;
   // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
   std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
+  bool box_overlap = false;  // written as [simulation] box_overlap = true
 };
 
 // The scene: `objects` objects of random shape, size and orientation in a column above a
