@@ -655,7 +655,9 @@ void separate_boxes(const Model& model, const BoxSet& boxes, State& state, Scrat
   const double box_depth = std::max(0.0, overlap.depth - model.box_skin);
   sink.max_depth = std::max(sink.max_depth, box_depth);
   sink.record(0.5 * (scratch.box_nodes[b1][8] + scratch.box_nodes[b2][8]), overlap.normal, box_depth, ContactKind::Inter);
-  respond_pair<kFriction>(model, state, cell_1, cell_2, overlap.normal, overlap.depth);
+  // Eq. 8-9 without a rebound: the push is geometric (the exact level answers the same way),
+  // and a rebound kick from it sent fast bodies flying (the fast_impact hard case).
+  respond_pair<kFriction>(model, state, cell_1, cell_2, overlap.normal, overlap.depth, /*may_rebound=*/false);
   invalidate_around(model, boxes, scratch, cell_1);
   invalidate_around(model, boxes, scratch, cell_2);
 }
