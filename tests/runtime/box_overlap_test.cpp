@@ -1,5 +1,6 @@
 // [simulation] box_overlap: boxes of two objects kept apart as wholes (box_test.h,
-// box_overlap), with a skin, where node-in-box tests let thin boxes cross like an X.
+// box_overlap), with a skin, where node-in-box tests let thin boxes cross like an X. (Its
+// determinism over thread counts: determinism_test.cpp.)
 #include <catch2/catch.hpp>
 
 #include "ffd/command.h"
@@ -8,7 +9,6 @@
 #include "ffd/state.h"
 #include "ffd/step.h"
 #include "ffd/surface_intersections.h"
-#include "ffd/worker_pool.h"
 
 using namespace ffd;
 
@@ -61,19 +61,4 @@ TEST_CASE("Box overlap: a letter dropped on a thin plate at level 2 rests crosse
   const Model model = letter_on_plate(true);
   CHECK(model.box_skin == Approx(1e-4));  // 1 % of the 1 cm cells
   CHECK(crossing_at_the_end(model) == 0);
-}
-
-TEST_CASE("Box overlap: the same state bit for bit on one thread and on two", "[box_overlap]") {
-  const Model model = letter_on_plate(true);
-  State one = start(model), two = start(model);
-  Scratch scratch_one = make_scratch(model), scratch_two = make_scratch(model);
-  WorkerPool pool(2);
-  attach_pool(model, scratch_two, pool);
-  StepReport report;
-  for (int i = 0; i < 600; ++i) {  // through the landing (about step 240) and the first bounces
-    step(model, one, scratch_one, report);
-    step(model, two, scratch_two, report);
-  }
-  CHECK(state_hash(one) == state_hash(two));
-  CHECK(one.x == two.x);
 }

@@ -6,6 +6,7 @@
 #include <hwy/targets.h>
 
 #include "ffd/command.h"
+#include "ffd/random_pile.h"
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
 #include "ffd/trilinear.h"
@@ -87,6 +88,16 @@ TEST_CASE("Determinism: sleeping objects give the same states on 1, 2 and 8 thre
     spec.objects.push_back(test::box_object("box" + std::to_string(i), Vec3(0.06, 0.04, 0.06), 0.02,
                                             Vec3(0.01 * (i % 2), 0.021 + 0.045 * i, 0.005 * i)));
   check_thread_counts(test::compile_quietly(spec), 400, false);
+}
+
+TEST_CASE("Determinism: a random pile with box_overlap gives the same states on 1, 2 and 8 threads at every level",
+          "[determinism]") {
+  PileOptions options;
+  options.seed = 1;
+  options.box_overlap = true;
+  const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_1.toml", "");
+  REQUIRE(spec.settings.box_overlap);
+  check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
 }
 
 TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, gives the same states and contacts",
