@@ -635,8 +635,9 @@ bool nodes_near(const Model& model, const BoxLevel& level, const State& state, c
 namespace {
 
 // "box_overlap": boxes b1 and b2 of two objects, their nodes answered, that still overlap
-// (or come within the skin) are moved apart as wholes, along the separating axis that parts
-// them soonest. Thin boxes crossing like an X have no node inside each other.
+// (or come within the skin) are moved apart as wholes, along the axis they came in along in
+// the last two steps, else the shortest way out. Thin boxes crossing like an X hold no node
+// of each other, or only a corner just inside.
 template <bool kFriction>
 void separate_boxes(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, Index b1, Index b2,
                     PairSink& sink) {

@@ -145,10 +145,12 @@ inline NodeInBox node_in_box(const BoxPlanes& planes, const Vec3& p, const Vec3&
   return result;
 }
 
-// How far two point sets' hulls overlap along the twelve face normals of two boxes (the
-// separating-axis test on those axes): a box's 8 corners, or the surface points inside it.
-// `normal` points from a towards b, and moving b by depth along it (or a by depth against it)
-// parts them along that axis, `skin` apart.
+// How far the hulls of two boxes' corners overlap along the twelve face normals of the two
+// (the separating-axis test on those axes), with `skin` counted as overlap. `normal` points
+// from a towards b, and moving b by depth along it (or a by depth against it) parts them
+// along that axis, `skin` apart. The axis is the one b came in along within `recent`
+// seconds, at `relative_velocity` (b's velocity less a's, m/s), as node_in_box picks a face;
+// without one, the shortest way out.
 struct BoxOverlap {
   bool overlapping = false;
   Vec3 normal = Vec3::Zero();
