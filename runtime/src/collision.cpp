@@ -634,6 +634,15 @@ bool nodes_near(const Model& model, const BoxLevel& level, const State& state, c
 
 namespace {
 
+// box_overlap() on boxes a and b as the scratch holds them; a degenerate box overlaps nothing.
+BoxOverlap boxes_overlap(const Scratch& scratch, Index a, Index b, double skin,
+                         const Vec3& relative_velocity = Vec3::Zero(), double recent = 0.0) {
+  const BoxPlanes planes_a = box_planes(scratch.box_nodes[a]), planes_b = box_planes(scratch.box_nodes[b]);
+  if (planes_a.degenerate || planes_b.degenerate) return BoxOverlap{};
+  return box_overlap(planes_a, scratch.box_nodes[a].data(), 8, planes_b, scratch.box_nodes[b].data(), 8, skin,
+                     relative_velocity, recent);
+}
+
 // "box_overlap": boxes b1 and b2 of two objects, their nodes answered, that still overlap
 // (or come within the skin) are moved apart as wholes, along the axis they came in along in
 // the last two steps, else the shortest way out. Thin boxes crossing like an X hold no node
@@ -643,14 +652,11 @@ void separate_boxes(const Model& model, const BoxSet& boxes, State& state, Scrat
                     PairSink& sink) {
   ensure_box(model, boxes, state, scratch, b1, sink.counters);
   ensure_box(model, boxes, state, scratch, b2, sink.counters);
-  const BoxPlanes planes_1 = box_planes(scratch.box_nodes[b1]), planes_2 = box_planes(scratch.box_nodes[b2]);
-  if (planes_1.degenerate || planes_2.degenerate) return;
   const Index cell_1 = boxes.box_cell[b1], cell_2 = boxes.box_cell[b2];
   const Vec3 relative_velocity =
       mean_velocity(state, model.cell_nodes[cell_2]) - mean_velocity(state, model.cell_nodes[cell_1]);
   const BoxOverlap overlap =
-      box_overlap(planes_1, scratch.box_nodes[b1].data(), 8, planes_2, scratch.box_nodes[b2].data(), 8, model.box_skin,
-                  relative_velocity, kRecentEntrySteps * model.settings.dt);
+      boxes_overlap(scratch, b1, b2, model.box_skin, relative_velocity, kRecentEntrySteps * model.settings.dt);
   if (!overlap.overlapping) return;
   ++sink.counters.inter_contacts;
   const double box_depth = std::max(0.0, overlap.depth - model.box_skin);
@@ -791,13 +797,6 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   return true;
 }
 
-// Whether boxes a and b overlap or come within `skin` (the detection's test for "box_overlap").
-bool boxes_overlap(const Scratch& scratch, Index a, Index b, double skin) {
-  const BoxPlanes planes_a = box_planes(scratch.box_nodes[a]), planes_b = box_planes(scratch.box_nodes[b]);
-  return !planes_a.degenerate && !planes_b.degenerate &&
-         box_overlap(planes_a, scratch.box_nodes[a].data(), 8, planes_b, scratch.box_nodes[b].data(), 8, skin).overlapping;
-}
-
 }  // namespace
 
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
@@ -815,7 +814,7 @@ void find_pair_hits(const Model& model, const BoxLevel& level, const State& stat
       scratch.pair_hit[p] = (state.asleep[o1] && state.asleep[o2]) ||
                             nodes_near(model, level, state, scratch, pair.a, pair.b, margin + skin) ||
                             nodes_near(model, level, state, scratch, pair.b, pair.a, margin + skin) ||
-                            (skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, skin));
+                            (skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, skin).overlapping);
     }
   };
   const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
