@@ -4,11 +4,13 @@
 #include <catch2/catch.hpp>
 
 #include "ffd/command.h"
+#include "ffd/measure.h"
 #include "ffd/random_pile.h"
 #include "ffd/scene_loader.h"
 #include "ffd/state.h"
 #include "ffd/step.h"
 #include "ffd/surface_intersections.h"
+#include "support/test_scenes.h"
 
 using namespace ffd;
 
@@ -61,4 +63,40 @@ TEST_CASE("Box overlap: a letter dropped on a thin plate at level 2 rests crosse
   const Model model = letter_on_plate(true);
   CHECK(model.box_skin == Approx(1e-4));  // 1 % of the 1 cm cells
   CHECK(crossing_at_the_end(model) == 0);
+}
+
+TEST_CASE("Box overlap: a flat box resting on another keeps the skin between their faces, which then never touch",
+          "[box_overlap]") {
+  // A 4 x 1 x 4 cm box on a 6 x 1 x 6 cm slab on the floor, 1 cm cells: the faces that meet
+  // are their boxes' faces. Without the skin the upper one rests in them (each step's sinking
+  // answered back to the face), and the surfaces touch or cross.
+  auto rest = [](bool box_overlap, double& gap, std::size_t& crossing) {
+    SceneSpec spec;
+    spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision;
+    spec.settings.alpha = 1.0;
+    spec.settings.box_overlap = box_overlap;
+    spec.planes.push_back(test::floor_plane());
+    spec.objects.push_back(test::box_object("slab", Vec3(0.06, 0.01, 0.06), 0.01, Vec3(0.0, 0.005, 0.0)));
+    spec.objects.push_back(test::box_object("box", Vec3(0.04, 0.01, 0.04), 0.01, Vec3(0.0, 0.0155, 0.0)));
+    const Model model = test::compile_quietly(spec);
+    State state = initial_state(model);
+    Scratch scratch = make_scratch(model);
+    StepReport report;
+    for (int i = 0; i < 1000; ++i) step(model, state, scratch, report);
+    REQUIRE(report.finite);
+    double top = -INFINITY, bottom = INFINITY;
+    for (const Vec3& v : deformed_surface(model, state, 0).vertices) top = std::max(top, v.y());
+    for (const Vec3& v : deformed_surface(model, state, 1).vertices) bottom = std::min(bottom, v.y());
+    gap = bottom - top;
+    crossing = SurfaceIntersections(model).count(state).between;
+  };
+  double gap = 0.0;
+  std::size_t crossing = 0;
+  rest(false, gap, crossing);
+  INFO("without: gap " << gap << " m, " << crossing << " crossing pairs");
+  CHECK((gap <= 0.0 || crossing > 0));
+  rest(true, gap, crossing);
+  CHECK(crossing == 0);
+  CHECK(gap > 0.25e-4);  // 0.057 mm: the skin, 0.1 mm, less the slab's and the box's sinking
+  CHECK(gap < 2e-4);
 }
