@@ -35,11 +35,7 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
 
 int run_accuracy_command(const AccuracyOptions& o) {
   try {
-    std::string readme_text;
-    if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of running
-      readme_text = read_file(o.readme);
-      replace_section(readme_text, o.readme, "accuracy:table", "");
-    }
+    if (!o.readme.empty()) check_sections(o.readme, {"accuracy:table"});  // before minutes of running
     std::vector<std::string> scenes = o.scenes;
     if (scenes.empty())
       scenes = {ffd::scenario_dir() + "/scenes/two_teapots.toml",
@@ -91,7 +87,7 @@ int run_accuracy_command(const AccuracyOptions& o) {
     if (!o.plot.empty()) std::filesystem::copy_file(png, o.plot, std::filesystem::copy_options::overwrite_existing);
     std::printf("%s", table.c_str());
     if (!o.readme.empty()) {
-      write_file(o.readme, replace_section(readme_text, o.readme, "accuracy:table", table));
+      update_sections(o.readme, {{"accuracy:table", table}});
       std::fprintf(stderr, "ffdsim accuracy: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim accuracy: wrote %s/accuracy.md, accuracy.json and accuracy.png\n", o.out_dir.c_str());

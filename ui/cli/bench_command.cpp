@@ -50,11 +50,7 @@ int run_bench(const BenchOptions& o) {
     std::vector<ffdbench::Scenario> chosen;
     for (const ffdbench::Scenario& s : all)
       if (o.only.empty() || std::find(o.only.begin(), o.only.end(), s.key) != o.only.end()) chosen.push_back(s);
-    std::string readme_text;
-    if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of benchmarking
-      readme_text = read_file(o.readme);
-      replace_section(replace_section(readme_text, o.readme, "bench:table", ""), o.readme, "bench:race", "");
-    }
+    if (!o.readme.empty()) check_sections(o.readme, {"bench:table", "bench:race"});  // before minutes of benchmarking
     ensure_folder(o.out_dir);
 
     const std::string cpu = ffdbench::cpu_description();
@@ -105,8 +101,7 @@ int run_bench(const BenchOptions& o) {
     write_file(std::filesystem::path(o.out_dir) / "bench.json", json.dump(2) + "\n");
     std::printf("%s\n%s", table.c_str(), race_table.c_str());
     if (!o.readme.empty()) {
-      write_file(o.readme, replace_section(replace_section(readme_text, o.readme, "bench:table", table), o.readme,
-                                           "bench:race", race_table));
+      update_sections(o.readme, {{"bench:table", table}, {"bench:race", race_table}});
       std::fprintf(stderr, "ffdsim bench: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim bench: wrote %s/table.md and %s/bench.json\n", o.out_dir.c_str(), o.out_dir.c_str());

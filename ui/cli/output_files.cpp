@@ -69,9 +69,24 @@ void ProgressBar::clear() {
 }
 
 void write_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  std::filesystem::path temporary = path;
+  temporary += ".partial";
+  {
+    std::ofstream out(temporary);
+    out << text;
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      throw std::runtime_error(path.string() + ": cannot write");
+    }
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) {
+    std::filesystem::remove(temporary, error);
+    throw std::runtime_error(path.string() + ": cannot write (" + error.message() + ")");
+  }
 }
 
 std::string read_file(const std::string& path) {
@@ -89,6 +104,17 @@ std::string replace_section(const std::string& text, const std::string& file, co
   if (b == std::string::npos || e == std::string::npos || e < b)
     throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
   return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
+}
+
+void check_sections(const std::string& file, const std::vector<std::string>& names) {
+  std::string text = read_file(file);
+  for (const std::string& name : names) text = replace_section(text, file, name, "");
+}
+
+void update_sections(const std::string& file, const Sections& sections) {
+  std::string text = read_file(file);
+  for (const auto& [name, body] : sections) text = replace_section(text, file, name, body);
+  write_file(file, text);
 }
 
 std::string duration_text(double seconds) {

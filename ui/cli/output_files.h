@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ffdsim {
 
@@ -28,13 +30,22 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
-void write_file(const std::filesystem::path& path, const std::string& text);  // throws naming the file
+// Writes through a temporary file beside it, renamed over it: a run cut short leaves the old
+// file whole. Throws naming the file.
+void write_file(const std::filesystem::path& path, const std::string& text);
 std::string read_file(const std::string& path);                               // throws naming the file
 
 // Replaces the text between "<!-- NAME:begin -->" and "<!-- NAME:end -->"; throws naming
 // `file` when the markers are missing.
 std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
                             const std::string& body);
+
+// `--update-readme`: check_sections() before a long run (a wrong path or a missing marker fails
+// at once), update_sections() after it, on the file as it is then, so that edits made to it
+// while the run went on are kept. Each pair: a section's name and its new body.
+using Sections = std::vector<std::pair<std::string, std::string>>;
+void check_sections(const std::string& file, const std::vector<std::string>& names);
+void update_sections(const std::string& file, const Sections& sections);
 
 std::string today();                              // YYYY-MM-DD, UTC
 std::string duration_text(double seconds);        // "4.2 s", "12 s", "3 min 05 s", "1 h 02 min"

@@ -42,11 +42,7 @@ void register_piles(CLI::App& app, PilesOptions& o) {
 
 int run_piles_command(const PilesOptions& o) {
   try {
-    std::string readme_text;
-    if (!o.readme.empty()) {  // read first: a wrong path fails before minutes of running
-      readme_text = read_file(o.readme);
-      replace_section(readme_text, o.readme, "piles:table", "");
-    }
+    if (!o.readme.empty()) check_sections(o.readme, {"piles:table"});  // before minutes of running
     std::vector<std::uint64_t> seeds = o.seeds;
     if (seeds.empty())
       for (std::uint64_t s = 1; s <= (o.long_set ? 20u : 3u); ++s) seeds.push_back(s);
@@ -103,7 +99,7 @@ int run_piles_command(const PilesOptions& o) {
                    "\n");
     std::printf("%s%s", table.c_str(), unclean.empty() ? "" : ("\n" + unclean).c_str());
     if (!o.readme.empty()) {
-      write_file(o.readme, replace_section(readme_text, o.readme, "piles:table", table));
+      update_sections(o.readme, {{"piles:table", table}});
       std::fprintf(stderr, "ffdsim piles: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim piles: wrote %s/piles.md and piles.json\n", o.out_dir.c_str());

@@ -1,0 +1,45 @@
+// `--update-readme`: the commands replace their section of the file as it is when they finish,
+// so that what was written into it during a run of minutes is kept.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "support/run_ffdsim.h"
+
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+TEST_CASE("Update README: piles replaces its section and keeps what was written into the file meanwhile", "[cli]") {
+  const std::filesystem::path dir = test::fresh_temp_dir("readme_update");
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path readme = dir / "README.md";
+  std::ofstream(readme) << "# Notes\n<!-- piles:table:begin -->\nthe old table\n<!-- piles:table:end -->\nafter the table\n";
+  // The run goes on in the background (a second or more: 2 objects, 1000 steps) while a line is
+  // added to the file; `wait` gives its exit code.
+  const std::string command = std::string(FFDSIM_BINARY) + " piles --seeds 1 --objects 2 --levels 2 --responses paper " +
+                              "--steps 1000 --quiet --out " + (dir / "out").string() + " --update-readme " +
+                              readme.string() + " & sleep 0.2; echo 'written during the run' >> " + readme.string() +
+                              "; wait $!";
+  const test::ProgramResult r = test::run_shell(command);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const std::string text = read_text(readme);
+  INFO(text);
+  CHECK_THAT(text, Catch::StartsWith("# Notes\n<!-- piles:table:begin -->\n"));
+  CHECK_THAT(text, Catch::Contains("| Response | Level | Clean piles"));
+  CHECK_THAT(text, !Catch::Contains("the old table"));
+  CHECK_THAT(text, Catch::Contains("<!-- piles:table:end -->\nafter the table\n"));
+  CHECK_THAT(text, Catch::Contains("written during the run"));
+  CHECK_FALSE(std::filesystem::exists(dir / "README.md.partial"));
+  std::filesystem::remove_all(dir);
+}
