@@ -1,11 +1,11 @@
 #include "bench/pile_table.h"
 
 #include <algorithm>
-#include <tuple>
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 #include <utility>
 
 #include "ffd/step.h"
@@ -22,6 +22,11 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
   for (const ffd::ObjectModel& object : model.objects)
     if (!(rms_speed(model, state, object) <= kRestSpeed)) return false;
   return true;
+}
+
+// A row's response as the table names it: "paper", "paper + box_overlap", "solver".
+std::string response_label(ffd::ContactResponse response, bool box_overlap) {
+  return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "");
 }
 
 }  // namespace
@@ -130,9 +135,9 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
       p50 += r.step_p50_ms;
       p99 = std::max(p99, r.step_p99_ms);
     }
-    s << "| " << ffd::response_name(response) << (box_overlap ? " + box_overlap" : "") << " | " << static_cast<int>(level) << " " << ffd::accuracy_name(level)
-      << " | " << clean << " / " << count << " | " << fixed(max_sum / static_cast<double>(count), 1) << " | " << last_max
-      << " | "
+    s << "| " << response_label(response, box_overlap) << " | " << static_cast<int>(level) << " "
+      << ffd::accuracy_name(level) << " | " << clean << " / " << count << " | "
+      << fixed(max_sum / static_cast<double>(count), 1) << " | " << last_max << " | "
       << (longest > 0.0 ? fixed(longest, 0) + " ms (pile " + std::to_string(longest_run->seed) + ": " +
                               longest_run->longest_between + ")"
                         : std::string("none"))
@@ -148,9 +153,10 @@ std::string markdown_unclean_piles(const std::vector<PileRun>& runs) {
     if (r.clean()) continue;
     if (!header) s << "Piles that are not clean:\n\n";
     header = true;
-    s << "- pile " << r.seed << ", " << ffd::response_name(r.response) << (r.box_overlap ? " + box_overlap" : "") << " level " << static_cast<int>(r.level) << ": "
-      << (r.finite ? "" : "NOT FINITE; ") << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max
-      << " pairs in the last second (max " << r.pairs_max << "), longest crossing " << fixed(r.longest_crossing_ms, 0)
+    s << "- pile " << r.seed << ", " << response_label(r.response, r.box_overlap) << " level "
+      << static_cast<int>(r.level) << ": " << (r.finite ? "" : "NOT FINITE; ")
+      << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max << " pairs in the last second (max "
+      << r.pairs_max << "), longest crossing " << fixed(r.longest_crossing_ms, 0)
       << " ms" << (r.longest_between.empty() ? "" : " (" + r.longest_between + ")") << "\n";
   }
   return s.str();
