@@ -6,6 +6,8 @@
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 namespace test {
@@ -40,6 +42,14 @@ inline std::filesystem::path fresh_temp_dir(const std::string& name) {
       std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   return dir;
+}
+
+// A file's whole content ("" when it cannot be read).
+inline std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace test

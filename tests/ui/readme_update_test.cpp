@@ -3,21 +3,9 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include "support/run_ffdsim.h"
-
-namespace {
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-}  // namespace
 
 TEST_CASE("Update README: piles replaces its section and keeps what was written into the file meanwhile", "[cli]") {
   const std::filesystem::path dir = test::fresh_temp_dir("readme_update");
@@ -33,7 +21,7 @@ TEST_CASE("Update README: piles replaces its section and keeps what was written 
   const test::ProgramResult r = test::run_shell(command);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
-  const std::string text = read_text(readme);
+  const std::string text = test::read_text(readme);
   INFO(text);
   CHECK_THAT(text, Catch::StartsWith("# Notes\n<!-- piles:table:begin -->\n"));
   CHECK_THAT(text, Catch::Contains("| Response | Level | Clean piles"));

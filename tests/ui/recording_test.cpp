@@ -24,14 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 
 using Result = test::ProgramResult;
+using test::read_text;
 using test::run_ffdsim;
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // A scene folder of its own (scene + mesh), so that a test can edit or move it.
 fs::path scene_folder(const std::string& name) {
@@ -82,7 +76,7 @@ TEST_CASE("a run killed with SIGKILL leaves a recording that replays every step 
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(40);
   while (reported_steps < 1500 && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    const std::string text = read_file(report);
+    const std::string text = read_text(report);
     if (text.empty()) continue;
     const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
     if (!j.is_discarded() && j.contains("steps")) reported_steps = j.at("steps").get<std::uint64_t>();
@@ -92,11 +86,11 @@ TEST_CASE("a run killed with SIGKILL leaves a recording that replays every step 
   waitpid(child, &status, 0);
   REQUIRE(WIFSIGNALED(status));
   REQUIRE(reported_steps >= 1500);
-  const nlohmann::json last_report = nlohmann::json::parse(read_file(report));
+  const nlohmann::json last_report = nlohmann::json::parse(read_text(report));
   CHECK(last_report.at("running") == true);
 
   // It holds all but the last few tens of milliseconds of what the report saw...
-  const std::string text = read_file(recording);
+  const std::string text = read_text(recording);
   INFO(text.substr(0, 400));
   const std::uint64_t held = last_hash_step(text);
   CHECK(held + 100 >= reported_steps);
@@ -125,7 +119,7 @@ TEST_CASE("a replay of a recording whose scene changed stops and names the scene
   const Result recorded = run_ffdsim("run " + scene.string() + " --headless --seconds 1.5 --record " + recording + " -q");
   INFO(recorded.output);
   REQUIRE(recorded.exit_code == 0);
-  const std::string text = read_file(recording);
+  const std::string text = read_text(recording);
   // Paths relative to the recording; the scene's text and content hashes in the header.
   CHECK(text.find("scene = \"../scenes/two_teapots.toml\"") != std::string::npos);
   CHECK(text.find("path = \"../meshes/teapot.obj\"") != std::string::npos);
@@ -142,7 +136,7 @@ TEST_CASE("a replay of a recording whose scene changed stops and names the scene
 
   // One stiffness edited: an error before any step, naming the scene and both hashes.
   const fs::path moved_scene = moved / "scenes" / "two_teapots.toml";
-  std::string scene_text = read_file(moved_scene);
+  std::string scene_text = read_text(moved_scene);
   const std::size_t at = scene_text.find("stiffness = 5000.0");
   REQUIRE(at != std::string::npos);
   scene_text.replace(at, 18, "stiffness = 5001.0");
@@ -229,7 +223,7 @@ release = "left"
         (recording.empty() || fs::last_write_time(e.path()) > fs::last_write_time(recording)))
       recording = e.path();
   REQUIRE(!recording.empty());
-  const std::string text = read_file(recording);
+  const std::string text = read_text(recording);
   INFO(recording.string());
   CHECK(text.rfind("# ffdsim recording, written as the session runs", 0) == 0);
   CHECK(text.find("grab = {") != std::string::npos);
