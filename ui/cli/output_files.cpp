@@ -84,7 +84,8 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
   std::error_code error;
   std::filesystem::rename(temporary, path, error);
   if (error) {
-    std::filesystem::remove(temporary, error);
+    std::error_code ignored;  // the rename's error is the one to report
+    std::filesystem::remove(temporary, ignored);
     throw std::runtime_error(path.string() + ": cannot write (" + error.message() + ")");
   }
 }
