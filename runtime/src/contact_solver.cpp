@@ -470,9 +470,11 @@ std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch
 // The velocities after the solve, contact by contact in list order, for each contact that
 // pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
 // v_ref, with the normal part stopped; then the rebound: -(1 - alpha) of the approach the
-// contact was found with (response.h), none for a resting contact. The tangential part keeps
-// 1 - beta. So alpha and beta mean what they mean in the paper, and a position correction of
-// the solve never leaves as metres per second (v = dx / dt of a millimetre is 1 m/s).
+// contact was found with (response.h), none for a resting contact. The tangential part is
+// stopped where the contact stuck and kept where it slid (Coulomb's friction acted in the
+// solve). So alpha and beta mean what they mean in the paper (beta as Coulomb's mu), and a
+// position correction of the solve never leaves as metres per second (v = dx / dt of a
+// millimetre is 1 m/s).
 void answer_velocities(const Model& model, State& state, Scratch& scratch, double beta) {
   const bool rebounds = state.params.alpha < 1.0;
   const double energy_before = rebounds ? answered_energy(model, state, scratch) : 0.0;  // J
@@ -486,12 +488,17 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
     Vec3 v_ref = a.inv_mass > 0.0 ? b.v : a.v;
     if (a.inv_mass > 0.0 && b.inv_mass > 0.0) v_ref = (a.v / a.inv_mass + b.v / b.inv_mass) / (1.0 / a.inv_mass + 1.0 / b.inv_mass);
     // A contact whose friction held inside the Coulomb cone in the solve sticks: static
-    // friction, its tangential motion stopped. One that slid keeps 1 - beta of it (eq. 8).
-    // Kept at 1 - beta, the sticking nodes under a box at rest swung sideways by 0.5 um
-    // every other step (0.12 mm/s RMS).
+    // friction, its tangential motion stopped (kept at 1 - beta, the sticking nodes under a
+    // box at rest swung sideways by 0.5 um every other step, 0.12 mm/s RMS). One that slid
+    // keeps its tangential motion: the solve's kinetic friction, mu lambda, is its friction.
+    // Taking 1 - beta of it as well was a drag in proportion to the speed, not to the load:
+    // a letter pressed against the bin's walls by 0.1 N, half its weight, hung there 1 m up
+    // for 2.7 s, sliding down at 2 cm/s. A lodged node's contact has no friction in the
+    // solve and keeps 1 - beta here, eq. 8.
     const bool stuck = beta > 0.0 && !c.lodged && c.friction.norm() < kStuck * beta * c.lambda;
-    set_side_velocity(model, state, c.a, a, v_ref, c.normal, stuck ? 1.0 : beta);
-    set_side_velocity(model, state, c.b, b, v_ref, c.normal, stuck ? 1.0 : beta);
+    const double tangential_loss = stuck ? 1.0 : c.lodged ? beta : 0.0;
+    set_side_velocity(model, state, c.a, a, v_ref, c.normal, tangential_loss);
+    set_side_velocity(model, state, c.b, b, v_ref, c.normal, tangential_loss);
   }
   if (!rebounds) return;
   // The stop and the rebound together never add kinetic energy to the nodes they answer: a

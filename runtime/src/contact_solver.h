@@ -13,9 +13,10 @@
 //   ContactSolve  per iteration: one sweep of every object's springs and volumes, then every
 //                 contact (non-penetration with Coulomb friction, mu = beta) and the grab;
 //                 then v = (x - x_prev) / dt, and eq. 8 on the two cells of each contact
-//                 that pushed: approach stopped, sliding kept at 1 - beta (none where the
-//                 contact stuck), then a rebound of 1 - alpha of its approach, once per node
-//                 and never adding kinetic energy (solve_contacts)
+//                 that pushed: approach stopped, sliding kept (its friction was the
+//                 solve's; none where the contact stuck), then a rebound of 1 - alpha of
+//                 its approach, once per node and never adding kinetic energy
+//                 (solve_contacts)
 // The contact list (Scratch::constraints) is the boundary: detection writes it, the solve reads
 // it. Everything runs in list order on one thread but the sweeps (objects over the pool), so
 // the result does not depend on the thread count.
