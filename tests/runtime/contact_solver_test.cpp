@@ -218,6 +218,56 @@ TEST_CASE("Response solver: rolling resistance stops a rolling ball; without it 
   CHECK(free_300 > 10.0 * resisted_300);
 }
 
+namespace {
+
+// A 10 cm box (1 kg) held against a wall (the plane x = 0) by a sideways gravity `push`
+// (m/s^2) with the usual 9.81 m/s^2 down, friction beta = mu = 0.5, stepped `steps` times.
+// Returns the box's momentum over its mass: its centre's velocity (m/s).
+Vec3 slide_on_wall(double push, int steps, Vec3& centre) {
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::Friction;
+  spec.settings.response = ContactResponse::Solver;
+  spec.settings.gravity = Vec3(-push, -9.81, 0.0);
+  spec.settings.beta = 0.5;
+  PlaneSpec wall;
+  wall.name = "wall";
+  wall.normal = Vec3::UnitX();
+  wall.offset = 0.0;
+  spec.planes.push_back(wall);
+  spec.objects.push_back(test::box_object("box", Vec3(0.1, 0.1, 0.1), 0.025, Vec3(0.0505, 1.0, 0.0)));
+  const Model model = test::compile_quietly(spec);
+  State state = initial_state(model);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  for (int i = 0; i < steps; ++i) step(model, state, scratch, report);
+  Vec3 momentum = Vec3::Zero();
+  double mass = 0.0;
+  for (Index n = 0; n < model.node_count(); ++n) {
+    momentum += model.node_mass[n] * state.v[n];
+    mass += model.node_mass[n];
+  }
+  centre = centre_of_mass(model, state.x, 0);
+  return momentum / mass;
+}
+
+}  // namespace
+
+TEST_CASE("Response solver: a box pressed on a wall by less than friction needs slides down at Coulomb's rate",
+          "[contact_solver]") {
+  // Pressed by half its weight, mu = 0.5: kinetic friction takes 0.5 x 4.905 of the 9.81
+  // m/s^2, so the box slides down at 7.36 m/s^2 (measured: 0.741 m/s after 0.1 s, 2.21 m/s
+  // after 0.3 s). A velocity pass that also took 1 - beta of the sliding speed each step
+  // held it to a 5 cm/s crawl, as a drag in proportion to the speed.
+  Vec3 centre;
+  const Vec3 v = slide_on_wall(4.905, 300, centre);
+  CHECK(-v.y() == Approx((9.81 - 0.5 * 4.905) * 0.3).epsilon(0.05));
+  CHECK(centre.x() == Approx(0.05).margin(0.001));  // against the wall, not into it or off it
+  // Pressed by three times its weight, static friction (up to 15 N) holds it (9.81 N).
+  const Vec3 held = slide_on_wall(30.0, 300, centre);
+  CHECK(held.norm() < 0.001);
+  CHECK(centre.y() == Approx(1.0).margin(0.001));
+}
+
 TEST_CASE("Response solver: a node lodged deep in a box is pushed out without friction", "[contact_solver]") {
   // The two stacked boxes; the upper one is put 3 mm into the lower one's top and given a
   // sideways velocity. Its bottom nodes are lodged (deeper than two steps' approach makes):
