@@ -493,7 +493,7 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
     // keeps its tangential motion: the solve's kinetic friction, mu lambda, is its friction.
     // Taking 1 - beta of it as well was a drag in proportion to the speed, not to the load:
     // a letter pressed against the bin's walls by 0.1 N, half its weight, hung there 1 m up
-    // for 2.7 s, sliding down at 2 cm/s. A lodged node's contact has no friction in the
+    // from 1.0 s to 2.75 s, sliding down at 2 cm/s. A lodged node's contact has no friction in the
     // solve and keeps 1 - beta here, eq. 8.
     const bool stuck = beta > 0.0 && !c.lodged && c.friction.norm() < kStuck * beta * c.lambda;
     const double tangential_loss = stuck ? 1.0 : c.lodged ? beta : 0.0;

@@ -222,7 +222,8 @@ namespace {
 
 // A 10 cm box (1 kg) held against a wall (the plane x = 0) by a sideways gravity `push`
 // (m/s^2) with the usual 9.81 m/s^2 down, friction beta = mu = 0.5, stepped `steps` times.
-// Returns the box's momentum over its mass: its centre's velocity (m/s).
+// Returns the box's momentum over its mass, its centre's velocity (m/s), and sets `centre`
+// to its centre of mass (m).
 Vec3 slide_on_wall(double push, int steps, Vec3& centre) {
   SceneSpec spec;
   spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::Friction;
