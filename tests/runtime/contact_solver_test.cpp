@@ -189,18 +189,23 @@ SceneSpec rolling_ball(double rolling_resistance) {
   return spec;
 }
 
-double centre_speed_after(const Model& model, int steps) {
-  State state = initial_state(model);
-  Scratch scratch = make_scratch(model);
-  StepReport report;
-  for (int i = 0; i < steps; ++i) step(model, state, scratch, report);
+// The lattice's momentum over its mass: the centre of mass's velocity (m/s).
+Vec3 centre_velocity(const Model& model, const State& state) {
   Vec3 momentum = Vec3::Zero();
   double mass = 0.0;
   for (Index n = 0; n < model.node_count(); ++n) {
     momentum += model.node_mass[n] * state.v[n];
     mass += model.node_mass[n];
   }
-  return (momentum / mass).norm();
+  return momentum / mass;
+}
+
+double centre_speed_after(const Model& model, int steps) {
+  State state = initial_state(model);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  for (int i = 0; i < steps; ++i) step(model, state, scratch, report);
+  return centre_velocity(model, state).norm();
 }
 
 }  // namespace
@@ -222,8 +227,7 @@ namespace {
 
 // A 10 cm box (1 kg) held against a wall (the plane x = 0) by a sideways gravity `push`
 // (m/s^2) with the usual 9.81 m/s^2 down, friction beta = mu = 0.5, stepped `steps` times.
-// Returns the box's momentum over its mass, its centre's velocity (m/s), and sets `centre`
-// to its centre of mass (m).
+// Returns its centre's velocity (m/s) and sets `centre` to its centre of mass (m).
 Vec3 slide_on_wall(double push, int steps, Vec3& centre) {
   SceneSpec spec;
   spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::Friction;
@@ -241,14 +245,8 @@ Vec3 slide_on_wall(double push, int steps, Vec3& centre) {
   Scratch scratch = make_scratch(model);
   StepReport report;
   for (int i = 0; i < steps; ++i) step(model, state, scratch, report);
-  Vec3 momentum = Vec3::Zero();
-  double mass = 0.0;
-  for (Index n = 0; n < model.node_count(); ++n) {
-    momentum += model.node_mass[n] * state.v[n];
-    mass += model.node_mass[n];
-  }
   centre = centre_of_mass(model, state.x, 0);
-  return momentum / mass;
+  return centre_velocity(model, state);
 }
 
 }  // namespace
