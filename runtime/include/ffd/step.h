@@ -61,8 +61,8 @@ struct ContactConstraint {
   ContactSide a, b;
   Vec3 normal = Vec3::Zero();    // unit, from side a's surface towards the outside
   double rest = 0.0;             // C = normal . (p_b - p_a) - rest >= 0 (m)
-  Vec3 a_start = Vec3::Zero();   // p_a and p_b at the start of the step (m): friction stops the slide since
-  Vec3 b_start = Vec3::Zero();
+  Vec3 a_start = Vec3::Zero();   // p_a and p_b at the start of the step (m): friction cancels
+  Vec3 b_start = Vec3::Zero();   // their tangential slide since then
   double approach = 0.0;         // normal . (v_b - v_a) when found, m/s (< 0: approaching)
   double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
   double lambda = 0.0;           // normal correction so far this step, m (>= 0)
