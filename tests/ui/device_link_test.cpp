@@ -551,12 +551,14 @@ TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and recei
     const std::uint16_t port = test_port(3 + bridge);
     // The device circles at 11 cm, so the probe (a 1.2 cm sphere) presses 2.5 mm into the
     // block's top (10 cm): a force comes back.
-    const std::string run = binary + " run --headless -q --seconds 3 --device udp://127.0.0.1:" + std::to_string(port) +
+    // The device sends for 4 s against a 5 s run: an ASan build on a loaded 2-core machine
+    // took over 2 s to start and answer, and a 2 s device then got no force back.
+    const std::string run = binary + " run --headless -q --seconds 5 --device udp://127.0.0.1:" + std::to_string(port) +
                             " " + kScene;
     const std::string device = bridge == 0 ? std::string(FFDSIM_EXAMPLE_BRIDGE) + " 127.0.0.1 " + std::to_string(port) +
-                                                 " 2 0 0.09 0"
+                                                 " 4 0 0.09 0"
                                            : "python3 " FFDSIM_BRIDGES_DIR "/ffdsim_device.py --port " +
-                                                 std::to_string(port) + " --seconds 2 --centre 0 0.09 0";
+                                                 std::to_string(port) + " --seconds 4 --centre 0 0.09 0";
     const ::test::ProgramResult r = ::test::run_shell(run + " & sleep 0.3; " + device + "; status=$?; wait; exit $status");
     const std::string& output = r.output;
     INFO(output);
