@@ -299,9 +299,8 @@ TEST_CASE("Response solver: a probe driven through a box on the floor never push
     deepest_probe = std::min(deepest_probe, state.probe.x.y());
   }
   CHECK(deepest_probe < 0.0);   // the proxy went through: the box was driven hard
-  // m: the box's nodes stay at the floor (measured: 4.2 mm below it at worst, a node the
-  // solve pushed down from beyond the plane's speculative margin; 11 cm below without the
-  // planes' last pass).
+  // m: the box's nodes stay at the floor (measured: 4.2 mm below it at worst; 11 cm below
+  // without the planes' last pass).
   CHECK(lowest > -0.01);
   CHECK(centre_of_mass(model, state.x, 0).y() > 0.0);
 }
