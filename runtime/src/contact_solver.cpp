@@ -51,6 +51,11 @@ constexpr double kStuck = 0.999;
 // plate and made the lifted teapot's nodes spike to 0.85 m/s.
 constexpr int kFrictionPasses = 7;
 
+// Whether a contact's friction held inside the Coulomb cone in the solve: it stuck.
+bool sticks(const ContactConstraint& c, double mu) {
+  return mu > 0.0 && !c.lodged && c.friction.norm() < kStuck * mu * c.lambda;
+}
+
 // A point carried by cell `cell` at local coordinates `local` (eq. 2).
 ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
   ContactSide side;
@@ -139,10 +144,63 @@ struct Bodies {
   }
 };
 
+// A contact's identity from step to step: what touches what (kind), the accuracy level whose
+// boxes the ids name, and the two ids; 0 (never anchored) where an id does not fit.
+enum class ContactKey : std::uint64_t { None = 0, BoxNode = 1, PlaneNode = 2, PlaneVertex = 3 };
+std::uint64_t contact_key(ContactKey kind, Accuracy accuracy, std::uint64_t a, std::uint64_t b) {
+  if (kind == ContactKey::None || a >= (std::uint64_t{1} << 29) || b >= (std::uint64_t{1} << 30)) return 0;
+  return (static_cast<std::uint64_t>(kind) << 62) | (static_cast<std::uint64_t>(accuracy) << 59) | (a << 30) | b;
+}
+// Box `mover`'s tested node k against face `face` of box `container`.
+std::uint64_t box_contact_key(Accuracy accuracy, Index container, int face, Index mover, int k) {
+  if (k >= 256) return 0;
+  return contact_key(ContactKey::BoxNode, accuracy, std::uint64_t{container} * 8 + static_cast<std::uint64_t>(face),
+                     std::uint64_t{mover} * 256 + static_cast<std::uint64_t>(k));
+}
+
+// Box b's tested node k against plane `plane`.
+std::uint64_t plane_contact_key(Accuracy accuracy, Index plane, Index b, int k) {
+  if (k >= 256) return 0;
+  return contact_key(ContactKey::PlaneNode, accuracy, plane, std::uint64_t{b} * 256 + static_cast<std::uint64_t>(k));
+}
+
+// The anchor the last step left for `key`, if any (State::anchors is sorted by key).
+const ContactAnchor* find_anchor(const State& state, std::uint64_t key) {
+  if (key == 0) return nullptr;
+  const auto begin = state.anchors.begin(), end = begin + static_cast<std::ptrdiff_t>(state.anchor_count);
+  const auto it = std::lower_bound(begin, end, key, [](const ContactAnchor& a, std::uint64_t k) { return a.key < k; });
+  return it != end && it->key == key ? &*it : nullptr;
+}
+
+// An orthonormal frame that turns with face `face` of box b, where the step began: its first
+// edge, the normal of its diagonals (eq. 3) x that edge, the normal. The world's where the face
+// has no such frame (a degenerate box).
+Mat3 face_frame(const Bodies& bodies, const BoxSet& boxes, Index b, int face) {
+  std::array<Vec3, 4> corner;
+  for (int i = 0; i < 4; ++i)
+    corner[i] = bodies.point_prev(cell_point(bodies.model, boxes.box_cell[b], boxes.box_local[b][kBoxFaces[face][i]]));
+  const Vec3 normal = (corner[2] - corner[0]).cross(corner[3] - corner[1]);
+  const Vec3 edge = corner[1] - corner[0];
+  const Vec3 tangent = edge - edge.dot(normal) / normal.squaredNorm() * normal;
+  Mat3 frame = Mat3::Identity();
+  if (!(normal.squaredNorm() > 0.0) || !(tangent.squaredNorm() > 0.0) || !is_finite(tangent)) return frame;
+  frame.col(2) = normal.normalized();
+  frame.col(0) = tangent.normalized();
+  frame.col(1) = frame.col(2).cross(frame.col(0));
+  return frame;
+}
+
+// The frame contact c's anchor is kept in: its box face's (face_frame), or the world's.
+Mat3 anchor_frame(const Bodies& bodies, const BoxSet& boxes, const ContactConstraint& c) {
+  return c.face_box == kNoIndex ? Mat3::Identity() : face_frame(bodies, boxes, c.face_box, c.face);
+}
+
 // Appends a contact: side b's point must stay on the outer side (along n) of side a's
-// surface; it is `depth` inside now.
+// surface; it is `depth` inside now. `key` names it from step to step (0: never anchored),
+// on face `face` of box `face_box` of `boxes` (kNoIndex: a plane).
 void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
-                 double depth) {
+                 double depth, std::uint64_t key = 0, const BoxSet* boxes = nullptr, Index face_box = kNoIndex,
+                 int face = 0) {
   const double dt = bodies.model.settings.dt;
   if (scratch.constraint_count >= scratch.constraints.size()) {
     scratch.constraints_dropped = true;
@@ -153,8 +211,12 @@ void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, c
   c.b = b;
   c.normal = n;
   c.rest = n.dot(bodies.point(b) - bodies.point(a)) + depth;
-  c.a_start = bodies.point_prev(a);
-  c.b_start = bodies.point_prev(b);
+  c.key = key;
+  const ContactAnchor* anchor = find_anchor(bodies.state, key);
+  c.face_box = face_box;
+  c.face = static_cast<std::uint8_t>(face);
+  c.hold = anchor ? Vec3(anchor_frame(bodies, *boxes, c) * anchor->offset)
+                  : Vec3(bodies.point_prev(b) - bodies.point_prev(a));
   c.approach = n.dot(bodies.velocity(b) - bodies.velocity(a));
   c.inv_mass = 0.0;
   c.lambda = 0.0;
@@ -216,7 +278,8 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
           scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
         }
         add_contact(bodies, scratch, face_point(model, boxes, container, face),
-                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth);
+                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth,
+                    box_contact_key(state.params.accuracy, container, face, mover, k), &boxes, container, face);
       }
     }
   }
@@ -236,7 +299,9 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
   ground.weight.fill(0.0);
   ground.count = 0;
   const int node_count = tested_node_count(level);
-  for (const PlaneModel& plane : model.planes) {
+  const Accuracy accuracy = state.params.accuracy;
+  for (Index plane_index = 0; plane_index < model.planes.size(); ++plane_index) {
+    const PlaneModel& plane = model.planes[plane_index];
     for (Index b = 0; b < boxes.size(); ++b) {
       const Index cell = boxes.box_cell[b];
       if (!scratch.object_solving[model.cell_object[cell]]) continue;  // frozen where it rests
@@ -257,7 +322,8 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
             max_depth = std::max(max_depth, -height);
             scratch.record_contact(bodies.point(side), plane.normal, -height, ContactKind::Plane);
           }
-          add_contact(bodies, scratch, ground, side, plane.normal, -height);
+          add_contact(bodies, scratch, ground, side, plane.normal, -height,
+                      contact_key(ContactKey::PlaneVertex, accuracy, plane_index, vertex));
         }
         continue;
       }
@@ -272,7 +338,7 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
           scratch.record_contact(p, plane.normal, -height, ContactKind::Plane);
         }
         add_contact(bodies, scratch, ground, cell_point(model, cell, tested_node_local(model, level, b, k)),
-                    plane.normal, -height);
+                    plane.normal, -height, plane_contact_key(accuracy, plane_index, b, k));
       }
     }
   }
@@ -328,11 +394,12 @@ void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, 
 
 namespace {
 
-// A contact's friction: a tangential correction that cancels its points' sliding over the
-// step within the Coulomb cone |friction| <= mu lambda, lambda its normal correction so far.
+// A contact's friction: a tangential correction that brings its points back to their held
+// offset (its anchor, or where the step began) within the Coulomb cone |friction| <= mu lambda,
+// lambda its normal correction so far.
 void project_friction(const Bodies& bodies, ContactConstraint& c, double mu) {
   if (!(mu > 0.0) || !(c.lambda > 0.0) || c.lodged) return;
-  const Vec3 slide = (bodies.point(c.b) - c.b_start) - (bodies.point(c.a) - c.a_start);
+  const Vec3 slide = (bodies.point(c.b) - bodies.point(c.a)) - c.hold;
   const Vec3 tangential = slide - c.normal.dot(slide) * c.normal;
   Vec3 friction = c.friction - tangential / c.inv_mass;
   const double limit = mu * c.lambda, size = friction.norm();
@@ -522,7 +589,7 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
     // a letter pressed against the bin's walls by 0.1 N, half its weight, hung there 1 m up
     // from 1.0 s to 2.75 s, sliding down at 2 cm/s. A lodged node's contact has no friction in the
     // solve and keeps 1 - beta here, eq. 8.
-    const bool stuck = beta > 0.0 && !c.lodged && c.friction.norm() < kStuck * beta * c.lambda;
+    const bool stuck = sticks(c, beta);
     const double tangential_loss = stuck ? 1.0 : c.lodged ? beta : 0.0;
     set_side_velocity(model, state, c.a, a, v_ref, c.normal, tangential_loss);
     set_side_velocity(model, state, c.b, b, v_ref, c.normal, tangential_loss);
@@ -671,6 +738,24 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
   }
 }
 
+// The contacts that pushed and stuck keep what their friction held as their anchors for the
+// next step; the others let go (a contact that slid starts again from where it ends the step).
+void keep_anchors(const Model& model, State& state, Scratch& scratch, double mu) {
+  const Bodies bodies{model, state, scratch};
+  const BoxSet& boxes = *box_level(model, state.params.accuracy).boxes;
+  std::size_t count = 0;
+  for (Index i = 0; i < scratch.constraint_count && mu > 0.0; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (c.key == 0 || !(c.lambda > 0.0) || !sticks(c, mu)) continue;
+    scratch.next_anchors[count++] = ContactAnchor{c.key, Vec3(anchor_frame(bodies, boxes, c).transpose() * c.hold)};
+  }
+  const auto begin = scratch.next_anchors.begin();
+  std::sort(begin, begin + static_cast<std::ptrdiff_t>(count),
+            [](const ContactAnchor& a, const ContactAnchor& b) { return a.key < b.key; });
+  state.anchor_count = std::min(count, state.anchors.size());  // beyond the room: not anchored
+  std::copy(begin, begin + static_cast<std::ptrdiff_t>(state.anchor_count), state.anchors.begin());
+}
+
 }  // namespace
 
 void solve_contacts(const Model& model, State& state, Scratch& scratch) {
@@ -696,6 +781,7 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   // the floor: the probe driven at 10^7 N/m put the box's centre 0.9 cm below the floor
   // (`probe_force`), its deepest contact at 0.65 m.
   project_contacts(bodies, scratch, beta, ContactPass::Planes);
+  keep_anchors(model, state, scratch, beta);
   finish_dynamics(model, state, scratch);
   const double dt = model.settings.dt;
   if (has(model.settings.effects, Effect::Probe)) {

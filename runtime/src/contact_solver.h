@@ -11,7 +11,8 @@
 //                 likewise (find_plane_contacts)
 //   Interaction   the probe's coupling predicted, its contacts found (find_probe_contacts)
 //   ContactSolve  per iteration: one sweep of every object's springs and volumes, then every
-//                 contact (non-penetration with Coulomb friction, mu = beta) and the grab;
+//                 contact (non-penetration with Coulomb friction, mu = beta, held at its
+//                 anchor if it stuck in the last step: State::anchors) and the grab;
 //                 then v = (x - x_prev) / dt, and eq. 8 on the two cells of each contact
 //                 that pushed: approach stopped, sliding kept (its friction was the
 //                 solve's; none where the contact stuck), then a rebound of 1 - alpha of

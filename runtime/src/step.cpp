@@ -123,6 +123,7 @@ Scratch make_scratch(const Model& model) {
   s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
   s.contacts.resize(kContactCapacity);
   s.constraints.resize(std::max<std::size_t>(4096, 4 * boxes));
+  s.next_anchors.resize(s.constraints.size());
   s.object_solving.assign(model.objects.size(), 0);
   s.object_motion.resize(model.objects.size());
   std::size_t most_triangles = 0;
@@ -165,8 +166,10 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
 
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) {
   // Contact constraints: twice the room, up to 64 per box of the largest set.
-  if (last.constraints_overflow && scratch.constraints.size() < 64 * largest_box_set(model) + 4096)
+  if (last.constraints_overflow && scratch.constraints.size() < 64 * largest_box_set(model) + 4096) {
     scratch.constraints.resize(2 * scratch.constraints.size());
+    scratch.next_anchors.resize(scratch.constraints.size());
+  }
   if (!last.hash_overflow || !model.collides) return;
   // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,
   // not a large one: stop growing there and keep reporting the overflow.
@@ -206,6 +209,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // Level 5's edge contacts (paper's response only) read where the step started.
   if (level.exact && state.params.response == ContactResponse::Paper)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
+  if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
   if (scratch.pool) scratch.pool->begin_step();
   for (Stage stage : model.pipeline) {
     if (stage == Stage::ContactSolve && !solver) continue;  // not run: its time stays -1

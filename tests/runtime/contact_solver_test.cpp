@@ -267,6 +267,21 @@ TEST_CASE("Response solver: a box pressed on a wall by less than friction needs 
   CHECK(centre.y() == Approx(1.0).margin(0.001));
 }
 
+TEST_CASE("Response solver: a box held on a wall just within friction's reach stays where it stuck",
+          "[contact_solver]") {
+  // Pressed by 1.02 times what mu = 0.5 needs to hold its weight: static friction holds it, and
+  // its contacts' anchors hold it where it stuck. Measured: 2.5e-15 m from 0.5 s to 3 s. With
+  // each step's friction holding its points only where the step began, what the solve left
+  // unconverged added up: 41 um in the same 2.5 s, as a slow slide down the wall.
+  const double push = 1.02 * 9.81 / 0.5;
+  Vec3 stuck, later;
+  slide_on_wall(push, 500, stuck);
+  const Vec3 v = slide_on_wall(push, 3000, later);
+  CHECK((later - stuck).norm() < 1.0e-6);
+  CHECK(v.norm() < 1.0e-4);
+  CHECK(later.x() == Approx(0.05).margin(0.001));  // against the wall
+}
+
 TEST_CASE("Response solver: a probe driven through a box on the floor never pushes it through the floor",
           "[contact_solver]") {
   // The probe_force hard case in small: a 10^7 N/m coupling, the device going from above a

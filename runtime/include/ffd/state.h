@@ -42,6 +42,15 @@ struct GrabState {
   Vec3 force = Vec3::Zero();     // N, spring force on the object at the grabbed point
 };
 
+// A contact's static-friction anchor (response "solver", contact_solver.cpp): while a contact
+// sticks, its friction holds its points at the offset p_b - p_a (m) where it first stuck, not
+// where each step began, so that what one step's solve leaves unconverged does not add up
+// step after step into a slide.
+struct ContactAnchor {
+  std::uint64_t key = 0;  // which contact: its boxes, face and tested node (contact_solver.cpp)
+  Vec3 offset = Vec3::Zero();  // m, in the frame of the face it lies on, so that it turns with it
+};
+
 struct State {
   std::uint64_t step = 0;  // steps taken since time zero
   TunableParams params;
@@ -62,6 +71,10 @@ struct State {
   std::vector<std::uint32_t> still_steps;  // steps its centre of mass has stayed near rest_anchor
   std::vector<Vec3> rest_anchor;           // m, where its centre of mass was when it last moved
   std::vector<std::uint8_t> moving;        // it left its anchor at the last Sleep stage, fast enough to wake others
+  // The contacts that stuck in the last step under the response "solver", sorted by key:
+  // anchors[0 .. anchor_count); the vector's size is its fixed capacity (initial_state).
+  std::vector<ContactAnchor> anchors;
+  std::size_t anchor_count = 0;
 };
 
 // FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,

@@ -61,8 +61,11 @@ struct ContactConstraint {
   ContactSide a, b;
   Vec3 normal = Vec3::Zero();    // unit, from side a's surface towards the outside
   double rest = 0.0;             // C = normal . (p_b - p_a) - rest >= 0 (m)
-  Vec3 a_start = Vec3::Zero();   // p_a and p_b at the start of the step (m): friction cancels
-  Vec3 b_start = Vec3::Zero();   // their tangential slide since then
+  std::uint64_t key = 0;         // which contact, from step to step (0: none, never anchored)
+  Vec3 hold = Vec3::Zero();      // m: friction holds p_b - p_a here, tangentially: its anchor,
+                                 // or where the step began
+  Index face_box = kNoIndex;     // side a's box and face, whose frame where the step began its
+  std::uint8_t face = 0;         // anchor is kept in (kNoIndex: a plane's, the world's)
   double approach = 0.0;         // normal . (v_b - v_a) when found, m/s (< 0: approaching)
   double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
   double lambda = 0.0;           // normal correction so far this step, m (>= 0)
@@ -218,6 +221,7 @@ struct Scratch {
   // and the grab's multiplier.
   std::vector<ContactConstraint> constraints;
   Index constraint_count = 0;
+  std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;
   Index object_task_count = 0;
