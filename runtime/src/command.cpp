@@ -118,6 +118,9 @@ void apply_command(const Model& model, const State& initial, State& state, const
       std::copy(initial.still_steps.begin(), initial.still_steps.end(), state.still_steps.begin());
       std::copy(initial.moving.begin(), initial.moving.end(), state.moving.begin());
       std::copy(initial.rest_anchor.begin(), initial.rest_anchor.end(), state.rest_anchor.begin());
+      std::copy(initial.anchors.begin(), initial.anchors.begin() + static_cast<std::ptrdiff_t>(initial.anchor_count),
+                state.anchors.begin());
+      state.anchor_count = initial.anchor_count;
       state.probe = initial.probe;
       state.grab = initial.grab;
       state.step = step;

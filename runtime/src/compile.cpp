@@ -541,8 +541,8 @@ State initial_state(const Model& model) {
   state.moving.assign(model.objects.size(), 0);
   state.rest_anchor.assign(model.objects.size(), Vec3::Constant(INFINITY));  // moves at the first step
   state.volume_pressure.assign(model.tetrahedra.size(), 0.0);  // and every tetrahedron at its volume
-  // Room for as many sticking contacts as the contact list starts with (make_scratch); more are
-  // not anchored.
+  // Room for 4 sticking contacts a cell, at least 4,096 (the solver's friction anchors); more
+  // are not anchored.
   state.anchors.resize(std::max<std::size_t>(4096, 4 * model.cell_count()));
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
   state.region_rotation.assign(model.regions.size(), Quat::Identity());
