@@ -425,7 +425,7 @@ TEST_CASE("Device link: a loop driven by a device allocates nothing on the physi
 
 TEST_CASE("ffdsim run --device with the device simulator: the force rises and falls, faults are counted, the recording "
           "replays",
-          "[cli][device]") {
+          "[cli][device][realtime]") {
   const fs::path dir = ::test::fresh_temp_dir("device_faults");
   fs::create_directories(dir);
   const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(1));
@@ -475,7 +475,7 @@ TEST_CASE("ffdsim run --device with the device simulator: the force rises and fa
 }
 
 TEST_CASE("ffdsim run --device: a device silent for 100 ms mid-press gets zero force at once, and no jump on return",
-          "[cli][device]") {
+          "[cli][device][realtime]") {
   const fs::path dir = ::test::fresh_temp_dir("device_watchdog");
   fs::create_directories(dir);
   const std::string url = "udp://127.0.0.1:" + std::to_string(test_port(2));
@@ -545,7 +545,7 @@ TEST_CASE("Reference bridges: the C header and the Python module speak the proto
   CHECK(std::string(line) == hex + "\n");
 }
 
-TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and receive its force", "[cli][device]") {
+TEST_CASE("Reference bridges in C and Python drive ffdsim run --device and receive its force", "[cli][device][realtime]") {
   const std::string binary = FFDSIM_BINARY;
   for (int bridge = 0; bridge < 2; ++bridge) {
     const std::uint16_t port = test_port(3 + bridge);

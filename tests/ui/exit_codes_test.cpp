@@ -98,7 +98,7 @@ TEST_CASE("Exit codes: piles", "[cli]") {
   check_exit("piles --seeds 1 --levels 2 --update-readme missing_readme.md", 2, "missing_readme.md");
 }
 
-TEST_CASE("Exit codes: device-sim", "[cli][device]") {
+TEST_CASE("Exit codes: device-sim", "[cli][device][realtime]") {
   const std::string script = std::string(FFDSIM_SCENARIO_DIR) + "/replays/device_press.toml";
   check_exit("device-sim " + script + " --to udp://127.0.0.1", 1, "expected udp://HOST:PORT");
   check_exit("device-sim " + script + " --to udp://127.0.0.1:9 --drop 2", 1, "--drop");
