@@ -190,9 +190,10 @@ Mat3 face_frame(const Bodies& bodies, const BoxSet& boxes, Index b, int face) {
   return frame;
 }
 
-// The frame contact c's anchor is kept in: its box face's (face_frame), or the world's.
-Mat3 anchor_frame(const Bodies& bodies, const BoxSet& boxes, const ContactConstraint& c) {
-  return c.face_box == kNoIndex ? Mat3::Identity() : face_frame(bodies, boxes, c.face_box, c.face);
+// The frame contact c's anchor is kept in: its box face's (face_frame, a face of `boxes`), or
+// the world's (a plane's contact, whose `boxes` may be null).
+Mat3 anchor_frame(const Bodies& bodies, const BoxSet* boxes, const ContactConstraint& c) {
+  return c.face_box == kNoIndex ? Mat3::Identity() : face_frame(bodies, *boxes, c.face_box, c.face);
 }
 
 // Appends a contact: side b's point must stay on the outer side (along n) of side a's
@@ -215,7 +216,7 @@ void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, c
   const ContactAnchor* anchor = find_anchor(bodies.state, key);
   c.face_box = face_box;
   c.face = static_cast<std::uint8_t>(face);
-  c.hold = anchor ? Vec3(anchor_frame(bodies, *boxes, c) * anchor->offset)
+  c.hold = anchor ? Vec3(anchor_frame(bodies, boxes, c) * anchor->offset)
                   : Vec3(bodies.point_prev(b) - bodies.point_prev(a));
   c.approach = n.dot(bodies.velocity(b) - bodies.velocity(a));
   c.inv_mass = 0.0;
@@ -742,7 +743,7 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
 // next step; the others let go (a contact that slid starts again from where it ends the step).
 void keep_anchors(const Model& model, State& state, Scratch& scratch, double mu) {
   const Bodies bodies{model, state, scratch};
-  const BoxSet& boxes = *box_level(model, state.params.accuracy).boxes;
+  const BoxSet* boxes = box_level(model, state.params.accuracy).boxes;
   std::size_t count = 0;
   for (Index i = 0; i < scratch.constraint_count && mu > 0.0; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
