@@ -7,8 +7,10 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -442,10 +444,20 @@ TEST_CASE("ffdsim run --device with the device simulator: the force rises and fa
   INFO(sim.dump(1));
   INFO(device.dump(1));
   // What the simulator injected is what the link counted (loopback loses nothing itself).
-  CHECK(device.at("duplicates").get<std::uint64_t>() == sim.at("duplicated").get<std::uint64_t>());
-  CHECK(device.at("out_of_order").get<std::uint64_t>() == sim.at("reordered").get<std::uint64_t>());
-  CHECK(device.at("sequence_gaps").get<std::uint64_t>() ==
-        sim.at("dropped").get<std::uint64_t>() + sim.at("reordered").get<std::uint64_t>());
+  // Exactly, unless the machine stalled the link for longer than its 20 ms watchdog: after a
+  // silence any sequence number starts afresh (as the link is specified), so a late sample
+  // that arrives first after it is taken, not counted out of order, and the gaps count from
+  // it. Each such silence moves those counts by one at most. The simulator makes no silence
+  // here, so the watchdog trips once, at the end of the run (the path ends before it), and
+  // once more for each stall: under ASan beside another test on 2 cores it tripped once
+  // mid-run, and 109 of 110 reordered samples were counted out of order.
+  const auto count = [](const nlohmann::json& j, const char* key) { return j.at(key).get<std::int64_t>(); };
+  REQUIRE(count(sim, "silent") == 0);
+  const std::int64_t stalls = std::max<std::int64_t>(0, count(device, "watchdog_trips") - 1);
+  CHECK(stalls <= 3);
+  CHECK(count(device, "duplicates") == count(sim, "duplicated"));
+  CHECK(std::abs(count(device, "out_of_order") - count(sim, "reordered")) <= stalls);
+  CHECK(std::abs(count(device, "sequence_gaps") - (count(sim, "dropped") + count(sim, "reordered"))) <= stalls);
   CHECK(device.at("malformed_total").get<std::uint64_t>() == 0);
   CHECK(sim.at("dropped").get<std::uint64_t>() > 100);
   CHECK(sim.at("duplicated").get<std::uint64_t>() > 40);
