@@ -13,6 +13,8 @@
 #include <string>
 #include <system_error>
 
+#include "support/run_ffdsim.h"
+
 int main(int argc, char* argv[]) {
   const std::filesystem::path config =
       std::filesystem::temp_directory_path() / ("ffdsim_test_config_" + std::to_string(getpid()));
@@ -21,5 +23,7 @@ int main(int argc, char* argv[]) {
   const int result = Catch::Session().run(argc, argv);
   std::error_code ignored;
   std::filesystem::remove_all(config, ignored);
+  if (result == 0)
+    for (const std::filesystem::path& dir : test::temp_dirs_made()) std::filesystem::remove_all(dir, ignored);
   return result;
 }

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace test {
 
@@ -35,12 +36,22 @@ inline ProgramResult run_ffdsim(const std::string& arguments, const std::string&
   return run_shell(prefix + std::string(FFDSIM_BINARY) + " " + arguments);
 }
 
+// The folders this test process made under the system's temporary folder: test_main.cpp
+// removes them when every test passed and keeps them to look at when one failed.
+inline std::vector<std::filesystem::path>& temp_dirs_made() {
+  static std::vector<std::filesystem::path> dirs;
+  return dirs;
+}
+
 // An empty folder of this test process's own under the system's temporary folder (the
-// process id in its name: two test runs at once never share one).
+// process id in its name: two test runs at once never share one). `name` + "_moved" beside
+// it is the process's too (a test that moves its folder moves it there).
 inline std::filesystem::path fresh_temp_dir(const std::string& name) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
+  temp_dirs_made().push_back(dir);
+  temp_dirs_made().push_back(dir.string() + "_moved");
   return dir;
 }
 
