@@ -44,14 +44,12 @@ inline std::vector<std::filesystem::path>& temp_dirs_made() {
 }
 
 // An empty folder of this test process's own under the system's temporary folder (the
-// process id in its name: two test runs at once never share one). `name` + "_moved" beside
-// it is the process's too (a test that moves its folder moves it there).
+// process id in its name: two test runs at once never share one).
 inline std::filesystem::path fresh_temp_dir(const std::string& name) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("ffdsim_test_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   temp_dirs_made().push_back(dir);
-  temp_dirs_made().push_back(dir.string() + "_moved");
   return dir;
 }
 

@@ -127,8 +127,7 @@ TEST_CASE("a replay of a recording whose scene changed stops and names the scene
   REQUIRE(recorded_hash.rfind("xxh3:", 0) == 0);
 
   // The whole folder moved: the recording still replays.
-  const fs::path moved = dir.string() + "_moved";
-  fs::remove_all(moved);
+  const fs::path moved = test::fresh_temp_dir("changed_moved");
   fs::rename(dir, moved);
   const std::string moved_recording = (moved / "recordings" / "session.toml").string();
   CHECK(run_ffdsim("replay " + moved_recording + " --fast -q").exit_code == 0);
