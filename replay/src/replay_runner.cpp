@@ -13,6 +13,7 @@
 
 #include "ffd/measure.h"
 #include "ffd/surface_intersections.h"
+#include "ffd/trilinear.h"
 #include "ffd/surface_metrics.h"
 
 namespace ffd {
@@ -48,6 +49,7 @@ std::uint64_t gcd_of_sample_steps(const ReplayScript& script) {
   for (const PositionLimit& p : script.positions) g = std::gcd(g, p.every_steps);
   if (script.rest.speed_max_m_s) g = std::gcd(g, script.rest.every_steps);
   for (const CreepLimit& c : script.creeps) g = std::gcd(g, c.every_steps);
+  if (script.stability.inverted_steps_max) g = 1;  // runs of steps: every step
   return g;
 }
 
@@ -157,6 +159,8 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   std::vector<PositionMeasure> positions(script.positions.size());
   std::vector<CreepMeasure> creeps(script.creeps.size());
   std::vector<ForceWindowMeasure> force_windows(script.force_windows.size());
+  std::vector<std::uint64_t> inverted_run;  // per cell: consecutive snapshots inside out so far
+  if (script.stability.inverted_steps_max) inverted_run.assign(model.cell_count(), 0);
   double motion_rms = 0.0, motion_kinetic = 0.0, motion_fastest = 0.0;
   std::uint64_t motion_rms_step = 0, motion_kinetic_step = 0, motion_fastest_step = 0, motion_steps = 0;
   std::vector<Vec3> centres, rest_centres;  // this snapshot's centres of mass; the last rest sample's
@@ -256,6 +260,26 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
       const std::uint64_t step = s->step;
       loop.recycle(s);
       if (exports) exports->snapshot(step, surface_state.x);
+      if (!inverted_run.empty()) {
+        std::uint64_t inverted = 0;
+        for (Index c = 0; c < model.cell_count(); ++c) {
+          const std::array<Index, 8>& corner = model.cell_nodes[c];
+          if (!cell_inside_out([&](int j) -> const Vec3& { return surface_state.x[corner[j]]; })) {
+            inverted_run[c] = 0;
+            continue;
+          }
+          ++inverted;
+          if (++inverted_run[c] > result.longest_inversion_steps) {
+            result.longest_inversion_steps = inverted_run[c];
+            result.longest_inversion_step = step;
+            result.longest_inversion_cell = c;
+          }
+        }
+        if (inverted > result.most_inverted_cells) {
+          result.most_inverted_cells = inverted;
+          result.most_inverted_step = step;
+        }
+      }
       if (!script.positions.empty() || script.rest.speed_max_m_s || !script.creeps.empty())
         centres_of_mass(model, surface_state.x, centres);
       for (std::size_t i = 0; i < script.creeps.size(); ++i) {
@@ -417,6 +441,23 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   }
   check_upper(out, "stability.speed_max_m_s", "", script.stability.speed_max_m_s, result.max_speed_m_s, "m/s", false,
               result.max_speed_step);
+  if (script.stability.inverted_steps_max) {
+    AssertionResult a;
+    a.name = "stability.inverted_steps_max";
+    if (result.longest_inversion_steps == 0) {
+      a.measured = "no cell inside out";
+    } else {
+      const Index object = model.cell_object[result.longest_inversion_cell];
+      a.measured = std::to_string(result.longest_inversion_steps) + " steps (cell " +
+                   std::to_string(result.longest_inversion_cell - model.objects[object].cell_begin) + " of '" +
+                   model.objects[object].name + "', to step " + std::to_string(result.longest_inversion_step) +
+                   "); at most " + std::to_string(result.most_inverted_cells) + " cells at once (step " +
+                   std::to_string(result.most_inverted_step) + ")";
+    }
+    a.limit = "<= " + std::to_string(*script.stability.inverted_steps_max) + " consecutive steps inside out";
+    a.passed = result.steps > 0 && result.longest_inversion_steps <= *script.stability.inverted_steps_max;
+    out.push_back(a);
+  }
   check_upper(out, "contact.max_penetration_m", "", script.contact.max_penetration_m, result.max_penetration_m, "m",
               false, result.max_penetration_step);
   if (script.contact.min_contacts) {
@@ -653,6 +694,10 @@ std::string replay_result_json(const ReplayScript& script, const ReplayResult& r
   j["probe_work_j"] = result.probe_work_j;
   if (script.stability.energy_gain_max_j) j["max_energy_gain_j"] = result.max_energy_gain_j;
   j["max_speed_m_s"] = result.max_speed_m_s;
+  if (script.stability.inverted_steps_max) {
+    j["longest_inversion_steps"] = result.longest_inversion_steps;
+    j["most_inverted_cells"] = result.most_inverted_cells;
+  }
   j["max_penetration_m"] = result.max_penetration_m;
   j["peak_force_n"] = result.peak_force_n;
   j["final_state_hash"] = hash_hex(result.final_hash);

@@ -38,7 +38,8 @@ const std::vector<std::string_view> kForceWindowKeys = {"from_step", "from_ms", 
 const std::vector<std::string_view> kLatencyKeys = {"compute_p50_us", "compute_p99_us", "compute_max_us",
                                                     "lateness_p50_us", "lateness_p99_us", "lateness_max_us",
                                                     "deadline_misses"};
-const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "energy_gain_max_j", "speed_max_m_s"};
+const std::vector<std::string_view> kStabilityKeys = {"finite", "energy_max_j", "energy_gain_max_j", "speed_max_m_s",
+                                                      "inverted_steps_max"};
 const std::vector<std::string_view> kContactKeys = {"max_penetration_m", "min_contacts", "from_step", "from_ms"};
 const std::vector<std::string_view> kGapKeys = {"objects", "max_gap_m", "max_penetration_m", "from_step",
                                                 "from_ms", "to_step", "to_ms", "every_steps", "every_ms"};
@@ -502,6 +503,9 @@ class ScriptReader {
         }
       }
       script.stability.speed_max_m_s = optional_number(s, "speed_max_m_s", kPositive);
+      if (s.has("inverted_steps_max"))
+        script.stability.inverted_steps_max =
+            static_cast<std::uint64_t>(s.integer("inverted_steps_max", 0, 0, kMaxSteps));
     }
     if (const toml::table* contact = a.subtable("contact")) {
       const TableReader c(origin_, *contact, "assert.contact", kContactKeys);

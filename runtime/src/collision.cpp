@@ -292,11 +292,7 @@ bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
 // is outside, and a response to them would push the other object in, crushing more cells.
 bool cell_inverted(const Model& model, const State& state, Index cell) {
   const std::array<Index, 8>& n = model.cell_nodes[cell];
-  const auto x = [&](int j) -> const Vec3& { return state.x[n[j]]; };  // corner j: (j & 1, j >> 1 & 1, j >> 2 & 1)
-  const Vec3 ds = x(1) - x(0) + x(3) - x(2) + x(5) - x(4) + x(7) - x(6);
-  const Vec3 dt = x(2) - x(0) + x(3) - x(1) + x(6) - x(4) + x(7) - x(5);
-  const Vec3 du = x(4) - x(0) + x(5) - x(1) + x(6) - x(2) + x(7) - x(3);
-  return !(ds.cross(dt).dot(du) > 0.0);
+  return cell_inside_out([&](int j) -> const Vec3& { return state.x[n[j]]; });
 }
 
 // Narrows (best_sq, best_point, best_normal) to the closest triangle of the cells sharing a

@@ -112,6 +112,8 @@ void apply_command(const Model& model, const State& initial, State& state, const
       std::copy(initial.x.begin(), initial.x.end(), state.x.begin());
       std::copy(initial.v.begin(), initial.v.end(), state.v.begin());
       std::copy(initial.region_rotation.begin(), initial.region_rotation.end(), state.region_rotation.begin());
+      std::copy(initial.cell_rotation.begin(), initial.cell_rotation.end(), state.cell_rotation.begin());
+      std::copy(initial.cell_shape_force.begin(), initial.cell_shape_force.end(), state.cell_shape_force.begin());
       std::copy(initial.spring_force.begin(), initial.spring_force.end(), state.spring_force.begin());
       std::copy(initial.volume_pressure.begin(), initial.volume_pressure.end(), state.volume_pressure.begin());
       std::copy(initial.asleep.begin(), initial.asleep.end(), state.asleep.begin());

@@ -116,6 +116,7 @@ void validate(const SceneSpec& spec) {
       require(std::isfinite(o.mass_spring.stiffness) && o.mass_spring.stiffness > 0.0, w + ".mass_spring.stiffness", "must be > 0 N/m");
       require(std::isfinite(o.mass_spring.damping) && o.mass_spring.damping >= 0.0, w + ".mass_spring.damping", "must be >= 0 N*s/m");
       require(std::isfinite(o.mass_spring.bulk_modulus) && o.mass_spring.bulk_modulus >= 0.0, w + ".mass_spring.bulk_modulus", "must be >= 0 Pa");
+      require(std::isfinite(o.mass_spring.shape_stiffness) && o.mass_spring.shape_stiffness >= 0.0, w + ".mass_spring.shape_stiffness", "must be >= 0 N/m");
       require(o.mass_spring.iterations >= 1 && o.mass_spring.iterations <= 100, w + ".mass_spring.iterations", "must be in 1..100");
     } else {
       require(o.shape_matching.stiffness > 0.0 && o.shape_matching.stiffness <= 1.0, w + ".shape_matching.stiffness", "must be in (0, 1]");
@@ -545,6 +546,10 @@ State initial_state(const Model& model) {
   // are not anchored.
   state.anchors.resize(std::max<std::size_t>(4096, 4 * model.cell_count()));
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
+  state.cell_rotation.assign(model.cell_count(), Quat::Identity());
+  state.cell_shape_force.assign(model.cell_count(), 0.0);
+  for (const ObjectModel& o : model.objects)
+    for (Index c = o.cell_begin; c < o.cell_end; ++c) state.cell_rotation[c] = Quat(o.initial_rotation);
   state.region_rotation.assign(model.regions.size(), Quat::Identity());
   for (const ObjectModel& o : model.objects)
     for (Index r = o.region_begin; r < o.region_end; ++r) state.region_rotation[r] = Quat(o.initial_rotation);

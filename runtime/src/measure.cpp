@@ -29,6 +29,10 @@ Energy compute_energy(const Model& model, const State& state) {
     // Likewise the volume constraints: p^2 V0 / 2K, K (V - V0)^2 / 2 V0 where converged.
     for (Index t = o.tetrahedron_begin; t < o.tetrahedron_end; ++t)
       e.elastic += 0.5 * state.volume_pressure[t] * state.volume_pressure[t] * model.tetrahedra[t].compliance;
+    // And the cells' shape constraints: f^2 / 2k, k C^2 / 2 where converged.
+    if (o.mass_spring.shape_stiffness > 0.0)
+      for (Index c = o.cell_begin; c < o.cell_end; ++c)
+        e.elastic += 0.5 * state.cell_shape_force[c] * state.cell_shape_force[c] / o.mass_spring.shape_stiffness;
   }
   return e;
 }

@@ -103,17 +103,22 @@ Scratch make_scratch(const Model& model) {
   s.node_stamp.assign(model.node_count(), 0);
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());
+  s.cell_shape_lambda.resize(model.cell_count());
   s.spring_inv_denominator.resize(model.springs.size());
   s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
   s.object_work.resize(model.objects.size());
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
     const ObjectModel& o = model.objects[i];
-    s.object_work[i] = o.dynamics == DynamicsKind::MassSpring
-                           ? static_cast<double>(o.spring_end - o.spring_begin) * o.mass_spring.iterations
-                           : o.region_begin == o.region_end
-                                 ? 0.0
-                                 : static_cast<double>(model.regions[o.region_end - 1].member_end -
-                                                       model.regions[o.region_begin].member_begin);
+    if (o.dynamics == DynamicsKind::MassSpring) {
+      double projections = static_cast<double>(o.spring_end - o.spring_begin);
+      // A cell's shape projection costs about 8 springs' (its rotation, its 8 nodes).
+      if (o.mass_spring.shape_stiffness > 0.0) projections += 8.0 * (o.cell_end - o.cell_begin);
+      s.object_work[i] = projections * o.mass_spring.iterations;
+    } else {
+      s.object_work[i] = o.region_begin == o.region_end ? 0.0
+                                                        : static_cast<double>(model.regions[o.region_end - 1].member_end -
+                                                                              model.regions[o.region_begin].member_begin);
+    }
   }
   s.objects_by_work.resize(model.objects.size());
   std::iota(s.objects_by_work.begin(), s.objects_by_work.end(), Index{0});

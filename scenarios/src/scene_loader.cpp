@@ -51,7 +51,8 @@ const std::vector<std::string_view> kGroupOnlyKeys = {"count", "layout", "random
 const std::vector<std::string_view> kLayoutKeys = {"grid", "spacing", "centre"};
 const std::vector<std::string_view> kRandomKeys = {"velocity", "angular_velocity", "rotation"};
 const std::vector<std::string_view> kGlyphKeys = {"text", "font", "em_size", "depth", "sample_spacing"};
-const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations", "bulk_modulus"};
+const std::vector<std::string_view> kMassSpringKeys = {"stiffness", "damping", "iterations", "bulk_modulus",
+                                                       "shape_stiffness"};
 const std::vector<std::string_view> kShapeMatchingKeys = {"stiffness", "region_half_width", "damping"};
 const std::vector<std::string_view> kShapeNames = {"box", "sphere", "torus", "ring", "bowl"};
 // The keys each built-in shape reads (besides `shape`); any other of kShapeKeys is an error.
@@ -563,6 +564,7 @@ class SceneReader {
       spec.mass_spring.iterations =
           static_cast<int>(table.integer("iterations", spec.mass_spring.iterations, 1, 100));
       spec.mass_spring.bulk_modulus = table.number("bulk_modulus", spec.mass_spring.bulk_modulus, kNonNegative);
+      spec.mass_spring.shape_stiffness = table.number("shape_stiffness", spec.mass_spring.shape_stiffness, kNonNegative);
     } else if (shape_matching) {
       const TableReader table(origin_, *shape_matching, object.field("shape_matching"), kShapeMatchingKeys);
       spec.dynamics = DynamicsKind::ShapeMatching;

@@ -527,3 +527,35 @@ TEST_CASE("Replay scripts: malformed intersection assertions name the file, line
   CHECK_THROWS_WITH(parse(script_with("[[assert.intersections]]\nmax_pairs = 0\npairs = 3\n")),
                     Contains("test.toml:6:1: assert.intersections[0].pairs: unknown key 'pairs'"));
 }
+
+TEST_CASE("Replay: the inverted-cells assertion counts the steps a cell stays inside out") {
+  // The crush case's first 750 ms: the probe drives through the mass-spring box to below
+  // the floor and holds it there, with cells inside out under it for tens of steps.
+  const std::string head = R"(version = 1
+scene = ")" + std::string(FFDSIM_SCENARIO_DIR) + R"(/scenes/hard/crush.toml"
+)";
+  const LoadedReplay strict = parse(head + R"(duration_ms = 750
+[[probe_path]]
+interpolation = "smooth"
+keyframes = [ { at_ms = 100, position = [-0.15, 0.2, 0.0] }, { at_ms = 500, position = [-0.15, -0.02, 0.0] },
+              { at_ms = 700, position = [-0.15, -0.02, 0.0] } ]
+[assert.stability]
+inverted_steps_max = 1
+)");
+  CHECK(strict.script.stability.inverted_steps_max == 1u);
+  const ReplayResult crushed = run_replay(strict, ReplayRunOptions{});
+  const std::string report = format_replay_result(strict.script, crushed);
+  INFO(report);
+  CHECK(crushed.longest_inversion_steps > 10);
+  CHECK(crushed.most_inverted_cells >= 1);
+  CHECK_THAT(report, Contains("FAIL stability.inverted_steps_max: ") && Contains(" of 'spring_box', to step "));
+
+  // Left alone, every cell stays upright.
+  const LoadedReplay calm = parse(head + "duration_ms = 200\n[assert.stability]\ninverted_steps_max = 0\n");
+  const ReplayResult upright = run_replay(calm, ReplayRunOptions{});
+  CHECK(upright.longest_inversion_steps == 0);
+  CHECK_THAT(format_replay_result(calm.script, upright), Contains("PASS stability.inverted_steps_max: no cell inside out"));
+
+  REQUIRE_THROWS_WITH(parse(script_with("[assert.stability]\ninverted_steps_max = -1\n")),
+                      StartsWith("test.toml:5:22: assert.stability.inverted_steps_max:"));
+}

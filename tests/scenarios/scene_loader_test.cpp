@@ -186,6 +186,7 @@ TEST_CASE("missing optional keys take their documented defaults", "[scene_loader
   CHECK(ball.mass_spring.damping == 0.5);
   CHECK(ball.mass_spring.iterations == 4);
   CHECK(ball.mass_spring.bulk_modulus == 0.0);  // springs only
+  CHECK(ball.mass_spring.shape_stiffness == 0.0);
   // subdivisions defaults to 3 and scale to 1.
   const ffd::SurfaceMesh expected = ffd::make_sphere_mesh(0.1, 3);
   CHECK(ball.mesh.vertices == expected.vertices);
@@ -427,6 +428,11 @@ TEST_CASE("scene value errors", "[scene_loader]") {
     require_error(scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [1, 1, 1]\n[object.mass_spring]\n"
                                     "bulk_modulus = -1e5\n"),
                   "inline.toml:8:16: object[0].mass_spring.bulk_modulus: must be >= 0 (got -1e+05)");
+  }
+  SECTION("negative shape stiffness") {
+    require_error(scene_with_object("name = \"a\"\nshape = \"box\"\nsize = [1, 1, 1]\n[object.mass_spring]\n"
+                                    "shape_stiffness = -5\n"),
+                  "inline.toml:8:19: object[0].mass_spring.shape_stiffness: must be >= 0 (got -5)");
   }
   SECTION("shape matching stiffness") {
     require_error(

@@ -49,6 +49,12 @@ struct ReplayResult {
   double initial_energy_j = 0.0, probe_work_j = 0.0;
   double max_energy_gain_j = -std::numeric_limits<double>::infinity(), probe_work_at_max_gain_j = 0.0;
   std::uint64_t max_energy_gain_step = 0;
+  // Cells inside out (when StabilityLimits::inverted_steps_max is asked): the longest run of
+  // consecutive steps one cell stayed so, that cell and the step the run reached its length;
+  // the most cells inside out at once and its step.
+  std::uint64_t longest_inversion_steps = 0, longest_inversion_step = 0;
+  Index longest_inversion_cell = 0;
+  std::uint64_t most_inverted_cells = 0, most_inverted_step = 0;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> hashes;  // (step, state hash) the run produced
   std::optional<std::uint64_t> first_divergence;  // first hash check that differed
   std::uint64_t final_hash = 0;

@@ -40,6 +40,9 @@ struct StabilityLimits {
   // work the probe's device has done so far (sampled every step when given).
   std::optional<double> energy_gain_max_j;
   std::optional<double> speed_max_m_s; // no lattice node faster than this
+  // No lattice cell inside out (ffd::cell_inside_out) for more than this many consecutive
+  // steps; measured on a snapshot of every step.
+  std::optional<std::uint64_t> inverted_steps_max;
 };
 
 struct ContactLimits {

@@ -50,6 +50,11 @@ struct MassSpringParams {
   // (XPBD, compliance V0 / K each): springs alone hold a cell turned inside out as well as
   // the upright one (a mirrored cell has every spring at its rest length).
   double bulk_modulus = 0.0;
+  // N/m; 0: off. Above 0, each lattice cell is also pulled towards its rest shape turned by
+  // the cell's best-fit rotation (a corotated element: shape matching on the cell's 8 nodes,
+  // solved as one XPBD constraint per cell). Its goal is never mirrored, so a cell turned
+  // inside out is pulled back upright, where springs alone hold it inverted.
+  double shape_stiffness = 0.0;
 };
 
 struct ShapeMatchingParams {

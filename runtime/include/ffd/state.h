@@ -57,12 +57,18 @@ struct State {
   std::vector<Vec3> x;  // (N) lattice node positions, m
   std::vector<Vec3> v;  // (N) lattice node velocities, m/s
   std::vector<Quat> region_rotation;  // (R) shape-matching rotations, warm start of the next step
+  // (C) each lattice cell's best-fit rotation from its rest shape, for the cells of
+  // mass-spring objects with a shape stiffness (MassSpringParams::shape_stiffness); the
+  // warm start of the next sweep.
+  std::vector<Quat> cell_rotation;
   // (S) N: each spring's force in the last step, elastic and damping, from its XPBD
   // multiplier (lambda / dt^2).
   // The elastic energy is read from it (measure.h); not part of the state hash (derived).
   std::vector<double> spring_force;
   // (T) Pa: each volume constraint's pressure in the last step (lambda / dt^2), as above.
   std::vector<double> volume_pressure;
+  // (C) N: each cell's shape force in the last step (lambda / dt^2), as above.
+  std::vector<double> cell_shape_force;
   ProbeState probe;
   GrabState grab;
   // The "sleeping" effect, per object (O): an object asleep is frozen (v = 0), takes no

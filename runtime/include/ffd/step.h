@@ -161,6 +161,7 @@ struct Scratch {
   std::vector<Vec3> x_start;
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
   std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
+  std::vector<double> cell_shape_lambda;   // XPBD Lagrange multipliers, one per cell (shape)
   // XPBD 1 / ((1 + gamma)(w_a + w_b) + alpha~) per spring, for the stiffness in
   // `denominator_stiffness` (per object): recomputed only when a command changes it.
   std::vector<double> spring_inv_denominator;

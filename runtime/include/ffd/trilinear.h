@@ -28,4 +28,15 @@ inline Vec3 trilinear_map(const Vec3& stu, CornerFn&& corner) {
   return p;
 }
 
+// A cell turned inside out: the Jacobian of eq. 2 at the cell's centre has a determinant
+// <= 0 (its three mean edge directions no longer form a right-handed frame). `corner(j)` is
+// the deformed corner j.
+template <class CornerFn>
+inline bool cell_inside_out(CornerFn&& corner) {
+  const Vec3 ds = corner(1) - corner(0) + corner(3) - corner(2) + corner(5) - corner(4) + corner(7) - corner(6);
+  const Vec3 dt = corner(2) - corner(0) + corner(3) - corner(1) + corner(6) - corner(4) + corner(7) - corner(5);
+  const Vec3 du = corner(4) - corner(0) + corner(5) - corner(1) + corner(6) - corner(2) + corner(7) - corner(3);
+  return !(ds.cross(dt).dot(du) > 0.0);
+}
+
 }  // namespace ffd
