@@ -341,6 +341,18 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
       }
     }
     obj.cell_end = static_cast<Index>(model.cell_nodes.size());
+    // Each cell's 8 nodes' summed mass and their mass-weighted centre at rest (the shape
+    // constraints of dynamics.cpp), once every cell has given its nodes their share.
+    for (Index c = obj.cell_begin; c < obj.cell_end; ++c) {
+      double mass = 0.0;
+      Vec3 centre = Vec3::Zero();
+      for (Index n : model.cell_nodes[c]) {
+        mass += model.node_mass[n];
+        centre += model.node_mass[n] * model.node_rest[n];
+      }
+      model.cell_node_mass.push_back(mass);
+      model.cell_rest_centre.push_back(centre / mass);
+    }
     obj.box_end = static_cast<Index>(model.boxes.size());
     obj.vertex_cell.resize(lattice.vertex_cell.size());
     for (std::size_t v = 0; v < lattice.vertex_cell.size(); ++v) obj.vertex_cell[v] = obj.cell_begin + lattice.vertex_cell[v];

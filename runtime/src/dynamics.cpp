@@ -3,6 +3,7 @@
 #include "ffd/worker_pool.h"
 #include "kernels/spring_kernels.h"
 
+#include <Eigen/Cholesky>
 #include <cmath>
 
 namespace ffd {
@@ -49,32 +50,63 @@ void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, do
   x3 += (w3 * dlambda) * g3;
 }
 
+// The rotation R (from q, updated in place) that maximises tr(R^T A): Newton steps on a
+// rotation w of R, with the gradient sum_i r_i x a_i (r_i, a_i the columns of R and A) and
+// the Hessian H = tr(B) I - (B + B^T) / 2, B = A R^T; where H is not positive definite (a
+// cell folded far from R, or inside out) the step of extract_rotation instead. Near the fit
+// a Newton step takes the error from e to O(e^2), where extract_rotation's takes it to e / 3
+// for a cube, and the update (1, w / 2) needs no sine or cosine.
+void fit_rotation(const Mat3& A, Quat& q, int max_iterations) {
+  for (int it = 0; it < max_iterations; ++it) {
+    const Mat3 R = q.matrix();
+    const Vec3 torque = R.col(0).cross(A.col(0)) + R.col(1).cross(A.col(1)) + R.col(2).cross(A.col(2));
+    const Mat3 B = A * R.transpose();
+    const Mat3 H = B.trace() * Mat3::Identity() - 0.5 * (B + B.transpose());
+    const Eigen::LLT<Mat3> newton(H);
+    Vec3 w;
+    if (newton.info() == Eigen::Success) w = newton.solve(torque);
+    else w = torque / (std::fabs(B.trace()) + 1.0e-9);
+    const double angle_sq = w.squaredNorm();
+    if (!(angle_sq > 1.0e-20) || !std::isfinite(angle_sq)) break;  // within 1e-10 rad
+    q = Quat(1.0, 0.5 * w.x(), 0.5 * w.y(), 0.5 * w.z()) * q;
+    q.normalize();
+  }
+}
+
+// Each cell's rotation for the step's sweeps, fitted to the predicted positions: the sweeps
+// move the nodes little beside the prediction, and fitting once a step instead of once a
+// projection takes the element's cost from about 5 spring solves to 1 (soft bunnies, perf).
+void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+  for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) {
+    const std::array<Index, 8>& node = model.cell_nodes[cell];
+    const Vec3& rest_centre = model.cell_rest_centre[cell];
+    Vec3 centre = Vec3::Zero();
+    for (Index n : node) centre += model.node_mass[n] * state.x[n];
+    centre /= model.cell_node_mass[cell];
+    Mat3 A = Mat3::Zero();
+    for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
+    fit_rotation(A, state.cell_rotation[cell], 2);  // warm-started from the last step
+    scratch.cell_rotation_matrix[cell] = state.cell_rotation[cell].matrix();
+  }
+}
+
 // One XPBD projection of a cell's shape constraint: a corotated element, shape matching
 // (Mueller et al. 2005) on the cell's 8 nodes. With c and c0 the mass-weighted centres of the
-// nodes now and at rest, R the rotation that best fits A = sum_j m_j (x_j - c)(r_j - c0)^T
-// and the goals g_j = R (r_j - c0) + c,
+// nodes now and at rest, R the cell's rotation (fit_cell_rotations) and the goals
+// g_j = R (r_j - c0) + c,
 //   C = sqrt(sum_j m_j |x_j - g_j|^2 / M),  M = sum_j m_j,  energy k C^2 / 2.
-// R is optimal and sum_j m_j (x_j - g_j) = 0, so the gradient is (m_j / M)(x_j - g_j) / C:
-// the generalised inverse mass is 1 / M and every node moves the same share of the way to
-// its goal, which changes neither momentum nor angular momentum. R is a rotation whichever
-// way the cell is folded, so an inverted cell's goal is upright.
-void project_cell_shape(const Model& model, Index cell, double alpha_tilde, double& lambda, State& state) {
+// sum_j m_j (x_j - g_j) = 0 and, R being the best fit, the goals exert no torque, so the
+// gradient is (m_j / M)(x_j - g_j) / C: the generalised inverse mass is 1 / M and every node
+// moves the same share of the way to its goal, which keeps momentum and angular momentum.
+// R is a rotation whichever way the cell is folded, so an inverted cell's goal is upright.
+void project_cell_shape(const Model& model, Index cell, const Mat3& R, double alpha_tilde, double& lambda,
+                        State& state) {
   const std::array<Index, 8>& node = model.cell_nodes[cell];
-  double M = 0.0;
-  Vec3 centre = Vec3::Zero(), rest_centre = Vec3::Zero();
-  for (Index n : node) {
-    M += model.node_mass[n];
-    centre += model.node_mass[n] * state.x[n];
-    rest_centre += model.node_mass[n] * model.node_rest[n];
-  }
+  const double M = model.cell_node_mass[cell];
+  const Vec3& rest_centre = model.cell_rest_centre[cell];
+  Vec3 centre = Vec3::Zero();
+  for (Index n : node) centre += model.node_mass[n] * state.x[n];
   centre /= M;
-  rest_centre /= M;
-  Mat3 A = Mat3::Zero();
-  for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
-  // Warm-started from the last sweep; with fewer iterations the fit lags behind a spinning
-  // cell and brakes it (a test loses 7 % of a box's angular momentum with 4, 43 % with 2).
-  extract_rotation(A, state.cell_rotation[cell], 8);
-  const Mat3 R = state.cell_rotation[cell].matrix();
   Vec3 to_goal[8];
   double sum = 0.0;
   for (int j = 0; j < 8; ++j) {
@@ -137,8 +169,10 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
   }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) scratch.tetrahedron_lambda[t] = 0.0;
-  if (obj.mass_spring.shape_stiffness > 0.0)
+  if (obj.mass_spring.shape_stiffness > 0.0) {
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c) scratch.cell_shape_lambda[c] = 0.0;
+    fit_cell_rotations(model, obj, state, scratch);
+  }
   return solve;
 }
 
@@ -155,7 +189,7 @@ void sweep_mass_spring(const Model& model, const ObjectModel& obj, const SpringS
   if (obj.mass_spring.shape_stiffness > 0.0) {
     const double alpha_tilde = 1.0 / (obj.mass_spring.shape_stiffness * dt * dt);  // XPBD: compliance / dt^2
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
-      project_cell_shape(model, c, alpha_tilde, scratch.cell_shape_lambda[c], state);
+      project_cell_shape(model, c, scratch.cell_rotation_matrix[c], alpha_tilde, scratch.cell_shape_lambda[c], state);
   }
 }
 

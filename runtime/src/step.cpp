@@ -104,6 +104,7 @@ Scratch make_scratch(const Model& model) {
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());
   s.cell_shape_lambda.resize(model.cell_count());
+  s.cell_rotation_matrix.resize(model.cell_count());
   s.spring_inv_denominator.resize(model.springs.size());
   s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
   s.object_work.resize(model.objects.size());

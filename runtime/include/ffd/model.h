@@ -141,6 +141,8 @@ struct Model {
   std::vector<Vec3i> cell_coord;      // integer lattice coordinates within the object
   std::vector<Index> cell_object;
   std::vector<double> cell_inv_mass;  // 1/kg, inverse of the summed mass share of the cell
+  std::vector<double> cell_node_mass; // kg, the summed mass of the cell's 8 nodes
+  std::vector<Vec3> cell_rest_centre; // m, their mass-weighted centre at rest
   // Cells that share a lattice node with cell c (c included): rows of a CSR table. When a
   // response moves c's nodes these cells' boxes are stale.
   std::vector<Index> cell_neighbour_begin;  // (C + 1)

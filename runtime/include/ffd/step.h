@@ -162,6 +162,7 @@ struct Scratch {
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
   std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
   std::vector<double> cell_shape_lambda;   // XPBD Lagrange multipliers, one per cell (shape)
+  std::vector<Mat3> cell_rotation_matrix;  // State::cell_rotation as a matrix, for the sweeps
   // XPBD 1 / ((1 + gamma)(w_a + w_b) + alpha~) per spring, for the stiffness in
   // `denominator_stiffness` (per object): recomputed only when a command changes it.
   std::vector<double> spring_inv_denominator;
