@@ -13,8 +13,8 @@
 
 #include "ffd/measure.h"
 #include "ffd/surface_intersections.h"
-#include "ffd/trilinear.h"
 #include "ffd/surface_metrics.h"
+#include "ffd/trilinear.h"
 
 namespace ffd {
 

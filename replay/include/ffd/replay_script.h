@@ -41,7 +41,8 @@ struct StabilityLimits {
   std::optional<double> energy_gain_max_j;
   std::optional<double> speed_max_m_s; // no lattice node faster than this
   // No lattice cell inside out (ffd::cell_inside_out) for more than this many consecutive
-  // steps; measured on a snapshot of every step.
+  // steps; measured on a snapshot of every step (a real-time run that drops snapshots, its
+  // reader falling behind, counts the snapshots it got).
   std::optional<std::uint64_t> inverted_steps_max;
 };
 

@@ -58,8 +58,8 @@ struct State {
   std::vector<Vec3> v;  // (N) lattice node velocities, m/s
   std::vector<Quat> region_rotation;  // (R) shape-matching rotations, warm start of the next step
   // (C) each lattice cell's best-fit rotation from its rest shape, for the cells of
-  // mass-spring objects with a shape stiffness (MassSpringParams::shape_stiffness); the
-  // warm start of the next sweep.
+  // mass-spring objects with a shape stiffness (MassSpringParams::shape_stiffness), fitted
+  // once a step; the warm start of the next step's fit.
   std::vector<Quat> cell_rotation;
   // (S) N: each spring's force in the last step, elastic and damping, from its XPBD
   // multiplier (lambda / dt^2).
