@@ -134,13 +134,15 @@ struct Bodies {
     for (int j = 0; j < s.count; ++j) w += s.weight[j] * s.weight[j] * inv_mass(s.node[j]);
     return w;
   }
-  // Moves the side's point by `delta` / (its share): node j by w_j / m_j * delta, so that the
-  // point moves by weighted_inv_mass * delta.
-  void move(const ContactSide& s, const Vec3& delta) const {
-    for (int j = 0; j < s.count; ++j) x(s.node[j]) += (s.weight[j] * inv_mass(s.node[j])) * delta;
+  // Each node's share of a push on the side's point, w_j / m_j, fixed for the step: the
+  // passes move the point many times a step and need not look the masses up each time.
+  void prepare(ContactSide& s) const {
+    for (int j = 0; j < s.count; ++j) s.share[j] = s.weight[j] * inv_mass(s.node[j]);
   }
-  void push(const ContactSide& s, const Vec3& delta_v) const {
-    for (int j = 0; j < s.count; ++j) v(s.node[j]) += (s.weight[j] * inv_mass(s.node[j])) * delta_v;
+  // Moves the side's point by `delta` / (its share): node j by w_j / m_j * delta, so that the
+  // point moves by weighted_inv_mass * delta. The side is prepare()d.
+  void move(const ContactSide& s, const Vec3& delta) const {
+    for (int j = 0; j < s.count; ++j) x(s.node[j]) += s.share[j] * delta;
   }
 };
 
@@ -412,9 +414,8 @@ void project_friction(const Bodies& bodies, ContactConstraint& c, double mu) {
 }
 
 enum class ContactPass {
-  All,              // every contact: non-penetration, then friction
-  Planes,           // the plane contacts alone, likewise: the planes have the last word
-  RestingFriction,  // the resting contacts' friction alone, their normal corrections held
+  All,     // every contact: non-penetration, then friction
+  Planes,  // the plane contacts alone, likewise: the planes have the last word
 };
 
 // One pass over the contact list: each contact's non-penetration (an inequality: its
@@ -424,10 +425,6 @@ void project_contacts(const Bodies& bodies, Scratch& scratch, double mu, Contact
     ContactConstraint& c = scratch.constraints[i];
     if (!(c.inv_mass > 0.0)) continue;
     if (pass == ContactPass::Planes && c.a.count != 0) continue;
-    if (pass == ContactPass::RestingFriction) {
-      if (!(c.approach < -kRestingApproach)) project_friction(bodies, c, mu);
-      continue;
-    }
     const Vec3 pa = bodies.point(c.a), pb = bodies.point(c.b);
     const double C = c.normal.dot(pb - pa) - c.rest;
     const double lambda = std::max(c.lambda - C / c.inv_mass, 0.0);
@@ -441,11 +438,33 @@ void project_contacts(const Bodies& bodies, Scratch& scratch, double mu, Contact
   }
 }
 
+// The resting contacts whose friction can act, in list order, into scratch.friction_contacts:
+// those that pushed in the pass just made (lambda > 0) and are neither approaching nor lodged.
+// Their normal corrections are held through the friction passes, so the set does not change
+// there; the passes visit these alone (on the teapots at rest, most of the list is
+// speculative contacts that never push).
+void gather_friction_contacts(Scratch& scratch, double mu) {
+  Index count = 0;
+  for (Index i = 0; i < scratch.constraint_count && mu > 0.0; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (c.inv_mass > 0.0 && c.lambda > 0.0 && !c.lodged && !(c.approach < -kRestingApproach))
+      scratch.friction_contacts[count++] = i;
+  }
+  scratch.friction_contact_count = count;
+}
+
+// One pass over the resting contacts' friction alone, their normal corrections held.
+void project_resting_friction(const Bodies& bodies, Scratch& scratch, double mu) {
+  for (Index k = 0; k < scratch.friction_contact_count; ++k)
+    project_friction(bodies, scratch.constraints[scratch.friction_contacts[k]], mu);
+}
+
 // The grab as a soft XPBD constraint C = p - target (compliance 1 / k, damping c), solved with
 // the rest, so that a heavy object hangs from it without the explicit spring's overshoot.
 void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
   const GrabState& grab = bodies.state.grab;
-  const ContactSide side = cell_point(model, grab.cell, grab.local);
+  ContactSide side = cell_point(model, grab.cell, grab.local);
+  bodies.prepare(side);
   const double w = bodies.weighted_inv_mass(side);
   if (!(w > 0.0)) return;
   const double h = model.settings.dt, k = model.settings.grab.stiffness, damping = model.settings.grab.damping;
@@ -764,6 +783,8 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     ContactConstraint& c = scratch.constraints[i];
     c.inv_mass = bodies.weighted_inv_mass(c.a) + bodies.weighted_inv_mass(c.b);
+    bodies.prepare(c.a);
+    bodies.prepare(c.b);
   }
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
   const bool grabbing = has(model.settings.effects, Effect::Grab) && state.grab.active;
@@ -773,8 +794,8 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   for (int it = 0; it < iterations; ++it) {
     sweep_dynamics(model, it, state, scratch);
     project_contacts(bodies, scratch, beta, ContactPass::All);  // Coulomb, mu = beta
-    for (int pass = 0; pass < friction_passes; ++pass)
-      project_contacts(bodies, scratch, beta, ContactPass::RestingFriction);
+    if (friction_passes > 0) gather_friction_contacts(scratch, beta);
+    for (int pass = 0; pass < friction_passes; ++pass) project_resting_friction(bodies, scratch, beta);
     if (grabbing) project_grab(model, bodies, scratch);
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.

@@ -130,6 +130,7 @@ Scratch make_scratch(const Model& model) {
   s.contacts.resize(kContactCapacity);
   s.constraints.resize(std::max<std::size_t>(4096, 4 * boxes));
   s.next_anchors.resize(s.constraints.size());
+  s.friction_contacts.resize(s.constraints.size());
   s.object_solving.assign(model.objects.size(), 0);
   s.object_motion.resize(model.objects.size());
   std::size_t most_triangles = 0;
@@ -175,6 +176,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
   if (last.constraints_overflow && scratch.constraints.size() < 64 * largest_box_set(model) + 4096) {
     scratch.constraints.resize(2 * scratch.constraints.size());
     scratch.next_anchors.resize(scratch.constraints.size());
+    scratch.friction_contacts.resize(scratch.constraints.size());
   }
   if (!last.hash_overflow || !model.collides) return;
   // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,

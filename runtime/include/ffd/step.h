@@ -54,7 +54,8 @@ inline constexpr Index kProbeNode = kNoIndex - 1;
 struct ContactSide {
   std::array<Index, 8> node;
   std::array<double, 8> weight;
-  std::uint8_t count = 0;  // node[0 .. count) carry the point
+  std::array<double, 8> share{};  // 1/kg: weight / mass of each node in this step's solve (0: static)
+  std::uint8_t count = 0;         // node[0 .. count) carry the point
   Index cell = kNoIndex;   // the lattice cell whose 8 nodes these are (none: the probe, a plane)
 };
 struct ContactConstraint {
@@ -224,6 +225,8 @@ struct Scratch {
   std::vector<ContactConstraint> constraints;
   Index constraint_count = 0;
   std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
+  std::vector<Index> friction_contacts;     // the resting contacts the friction passes revisit
+  Index friction_contact_count = 0;
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;
   Index object_task_count = 0;
