@@ -56,7 +56,7 @@ struct ContactSide {
   std::array<double, 8> weight;
   std::array<double, 8> share{};  // 1/kg: weight / mass of each node in this step's solve (0: static)
   std::uint8_t count = 0;         // node[0 .. count) carry the point
-  Index cell = kNoIndex;   // the lattice cell whose 8 nodes these are (none: the probe, a plane)
+  Index cell = kNoIndex;          // the lattice cell whose 8 nodes these are (none: the probe, a plane)
 };
 struct ContactConstraint {
   ContactSide a, b;
