@@ -73,6 +73,13 @@ void fit_rotation(const Mat3& A, Quat& q, int max_iterations) {
   }
 }
 
+// The mass-weighted centre of a cell's 8 nodes now (m).
+Vec3 cell_centre(const Model& model, const State& state, Index cell) {
+  Vec3 centre = Vec3::Zero();
+  for (Index n : model.cell_nodes[cell]) centre += model.node_mass[n] * state.x[n];
+  return centre / model.cell_node_mass[cell];
+}
+
 // Each cell's rotation for the step's sweeps, fitted to the predicted positions: the sweeps
 // move the nodes little beside the prediction, and fitting once a step instead of once a
 // projection took the element from about 5 times the springs' cost to 1.6 times (the soft
@@ -81,9 +88,7 @@ void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state
   for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) {
     const std::array<Index, 8>& node = model.cell_nodes[cell];
     const Vec3& rest_centre = model.cell_rest_centre[cell];
-    Vec3 centre = Vec3::Zero();
-    for (Index n : node) centre += model.node_mass[n] * state.x[n];
-    centre /= model.cell_node_mass[cell];
+    const Vec3 centre = cell_centre(model, state, cell);
     Mat3 A = Mat3::Zero();
     for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
     fit_rotation(A, state.cell_rotation[cell], 2);  // warm-started from the last step
@@ -106,9 +111,7 @@ void project_cell_shape(const Model& model, Index cell, const Mat3& R, double al
   const std::array<Index, 8>& node = model.cell_nodes[cell];
   const double M = model.cell_node_mass[cell];
   const Vec3& rest_centre = model.cell_rest_centre[cell];
-  Vec3 centre = Vec3::Zero();
-  for (Index n : node) centre += model.node_mass[n] * state.x[n];
-  centre /= M;
+  const Vec3 centre = cell_centre(model, state, cell);
   Vec3 to_goal[8];
   double sum = 0.0;
   for (int j = 0; j < 8; ++j) {
