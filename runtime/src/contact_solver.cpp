@@ -56,28 +56,37 @@ bool sticks(const ContactConstraint& c, double mu) {
   return mu > 0.0 && !c.lodged && c.friction.norm() < kStuck * mu * c.lambda;
 }
 
+// The side carried by cell `cell`'s nodes with `weight`, those of weight 0 left out, in
+// cell order: a box corner is one node, a face's mean four. The passes read and move a side
+// many times a step; a weight of 0 adds exactly 0, so the sums are the same bit for bit.
+ContactSide carried_by(const Model& model, Index cell, const std::array<double, 8>& weight) {
+  ContactSide side;
+  side.node.fill(kNoIndex);
+  side.weight.fill(0.0);
+  side.count = 0;
+  side.cell = cell;
+  for (int j = 0; j < 8; ++j) {
+    if (weight[j] == 0.0) continue;
+    side.node[side.count] = model.cell_nodes[cell][j];
+    side.weight[side.count] = weight[j];
+    ++side.count;
+  }
+  return side;
+}
+
 // A point carried by cell `cell` at local coordinates `local` (eq. 2).
 ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
-  ContactSide side;
-  side.node = model.cell_nodes[cell];
-  side.weight = trilinear_weights(local);
-  side.count = 8;
-  side.cell = cell;
-  return side;
+  return carried_by(model, cell, trilinear_weights(local));
 }
 
 // The mean of a box face's four corners: the point its plane moves with.
 ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int face) {
-  ContactSide side;
-  side.node = model.cell_nodes[boxes.box_cell[b]];
-  side.weight.fill(0.0);
-  side.count = 8;
-  side.cell = boxes.box_cell[b];
+  std::array<double, 8> weight{};
   for (int i = 0; i < 4; ++i) {
     const std::array<double, 8> w = trilinear_weights(boxes.box_local[b][kBoxFaces[face][i]]);
-    for (int j = 0; j < 8; ++j) side.weight[j] += 0.25 * w[j];
+    for (int j = 0; j < 8; ++j) weight[j] += 0.25 * w[j];
   }
-  return side;
+  return carried_by(model, boxes.box_cell[b], weight);
 }
 
 // The proxy's inverse mass as the contacts see it: its coupling is integrated by backward
