@@ -46,6 +46,7 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
       cell_vertices[o.vertex_cell[v]].push_back(static_cast<Index>(model.surface_vertex_cell.size()));
       model.surface_vertex_cell.push_back(o.vertex_cell[v]);
       model.surface_vertex_local.push_back(o.vertex_local[v]);
+      model.surface_vertex_rest.push_back(o.surface.vertices[v]);
     }
     const Index first_triangle = static_cast<Index>(model.surface_triangles.size());
     for (const auto& t : o.surface.triangles)
@@ -87,6 +88,7 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
     model.cell_edge_begin.push_back(static_cast<Index>(model.cell_edges.size()));
   }
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
+  model.surface_skin = std::isfinite(finest_cell) ? 0.01 * finest_cell : 0.0;  // as box_skin
 }
 
 void validate(const SceneSpec& spec) {

@@ -99,7 +99,7 @@ Scratch make_scratch(const Model& model) {
     s.object_answered.resize(model.objects.size());
   }
   s.x_prev.resize(model.node_count());
-  s.x_start.resize(model.node_count());
+  s.x_start.assign(model.node_count(), Vec3::Zero());  // (Eigen leaves a resized Vec3 unset)
   s.node_stamp.assign(model.node_count(), 0);
   s.lambda.resize(model.springs.size());
   s.tetrahedron_lambda.resize(model.tetrahedra.size());

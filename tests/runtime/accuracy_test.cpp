@@ -240,6 +240,7 @@ double exact_narrow_phase(ScaledSlab& s) {
   grow_box_bounds(s.model, s.model.boxes, s.model.surface_contact_radius, scratch);
   REQUIRE(find_candidate_pairs(s.model, box_level(s.model, Accuracy::Exact), s.state, scratch, counters));
   const State before = s.state;
+  scratch.x_start = s.state.x;  // where the step started, as step() keeps it for the edge contacts
   double depth = 0.0;
   collide_surfaces<false>(s.model, s.state, scratch, counters, depth);
   const ObjectModel& box = s.model.objects[1];

@@ -166,6 +166,7 @@ struct Model {
   // come from the box broad phase, widened by the contact radius.
   std::vector<Index> surface_vertex_cell;
   std::vector<Vec3> surface_vertex_local;
+  std::vector<Vec3> surface_vertex_rest;  // m, the vertex in the object's rest shape (its mesh)
   std::vector<std::array<Index, 3>> surface_triangles;
   std::vector<Index> cell_vertex_begin, cell_vertices;    // (C + 1), vertex indices
   std::vector<Index> cell_triangle_begin, cell_triangles;  // (C + 1), triangle indices
@@ -177,6 +178,10 @@ struct Model {
   std::vector<Index> cell_edge_begin;
   std::vector<std::array<Index, 2>> cell_edges;
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
+  // m, the gap the exact level keeps between surfaces: a vertex this close in front of a
+  // triangle is a contact too, and goes out to it. Pushed only to the face, a vertex lies on
+  // it, and the surfaces touch (they intersect: share a point) until they part.
+  double surface_skin = 0.0;
   double box_skin = 0.0;  // m, "box_overlap": the gap kept between boxes of two objects (0: off)
   std::uint32_t sleep_steps = 0;         // "sleeping": sleep_time in steps (>= 1)
 
