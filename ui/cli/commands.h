@@ -128,6 +128,7 @@ struct PilesOptions {
   std::string scenes_dir;            // also write each pile's scene file here
   bool box_overlap = false;          // every pile with [simulation] box_overlap = true
   std::string readme;                // Markdown file whose piles section is replaced
+  bool require_clean = false;        // exit 4 unless every pile ends clean
   int threads = 0;
   bool quiet = false;
 };

@@ -1,6 +1,7 @@
 // `ffdsim piles`: seeded random piles of rings, tori, plates, bowls and letters dropped at
 // every accuracy level under each response; intersecting triangle pairs over time, the
 // longest crossing and the step time (ui/bench/pile_table.h). A table (Markdown, JSON).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -36,6 +37,9 @@ void register_piles(CLI::App& app, PilesOptions& o) {
   cmd->add_option("--update-readme", o.readme, "Also replace the <!-- piles:table:begin --> section of this file");
   cmd->add_flag("--box-overlap", o.box_overlap,
                 "Every pile with [simulation] box_overlap = true (boxes of two objects kept apart as wholes)");
+  cmd->add_flag("--require-clean", o.require_clean,
+                "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
+                "longer than 50 ms");
   add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
 }
@@ -103,7 +107,14 @@ int run_piles_command(const PilesOptions& o) {
       std::fprintf(stderr, "ffdsim piles: updated %s\n", o.readme.c_str());
     }
     std::fprintf(stderr, "ffdsim piles: wrote %s/piles.md and piles.json\n", o.out_dir.c_str());
-    return finite ? kExitOk : kExitRuntime;
+    if (!finite) return kExitRuntime;
+    const auto unclean_runs = std::count_if(runs.begin(), runs.end(), [](const ffdbench::PileRun& r) { return !r.clean(); });
+    if (o.require_clean && unclean_runs > 0) {
+      std::fprintf(stderr, "ffdsim piles: check failed: %lld of %zu runs not clean (listed in %s/piles.md)\n",
+                   static_cast<long long>(unclean_runs), runs.size(), o.out_dir.c_str());
+      return kExitAssertionFailed;
+    }
+    return kExitOk;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;
