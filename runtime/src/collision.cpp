@@ -376,8 +376,9 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   if (tri_begin == tri_end) return;
   const Index vertex_begin = model.cell_vertex_begin[cell_b], vertex_end = model.cell_vertex_begin[cell_b + 1];
   if (vertex_begin == vertex_end || cell_inverted(model, state, cell_a)) return;
-  // Between objects a vertex goes out to the skin (Model::surface_skin). Not within one: a
-  // skin there folded a letter of a random pile into itself.
+  // Between objects a vertex goes out to the skin (Model::surface_skin). Not within one,
+  // where it gained nothing measured: with it there too (before edge pushes were bounded),
+  // 13 of 20 random piles ended clean against 14 without.
   const double radius = model.surface_contact_radius, skin = self ? 0.0 : model.surface_skin;
   // The triangles' AABB widened by the radius: vertices outside it miss them all.
   Vec3 reach_lo, reach_hi;
@@ -489,8 +490,9 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const
 // each other (the sign of orient(p, q, r, s) changed); the edge goes back along their common
 // perpendicular to the side it was on. By at most `reach` (the depth level 5 sees a vertex
 // at), as crossed_way_out: a long edge that turned through a face in one step reads deep at
-// its far end (13 mm in a random pile, seed 13), and moving its cells that far in one go
-// crushed a torus through itself (91,260 crossing pairs). What is left goes next step.
+// its far end (up to 13 mm as a letter hit a torus in a random pile, seed 13); unbounded,
+// that pile blew up (91,260 crossing pairs at the end), bounded it did not. What is left
+// goes next step.
 // False if neither can be told.
 bool edge_way_back(const Vec3 (&now)[5], const Vec3 (&start)[5], double reach, Vec3& normal, double& depth) {
   const Vec3 &p = now[0], &q = now[1];
