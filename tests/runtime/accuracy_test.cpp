@@ -317,6 +317,30 @@ struct ExactPair {
 
 }  // namespace
 
+TEST_CASE("Accuracy: the exact level keeps a skin between two objects' surfaces, not touching") {
+  // A 4 cm cube at rest on an 8 x 4 x 8 cm block, no gravity, its bottom face at `height`
+  // above the block's top, off centre so that its corners lie inside the top's triangles:
+  // the deepest push the first step answers (0: none). Pushed only onto the face, a vertex
+  // would end on it and the surfaces would touch (intersect).
+  const auto deepest_push = [](double height, double& skin) {
+    SceneSpec spec;
+    spec.settings.effects = static_cast<EffectSet>(Effect::InterCollision);
+    spec.objects.push_back(box_object("block", Vec3(0.08, 0.04, 0.08), 0.04, Vec3::Zero()));
+    spec.objects.push_back(box_object("cube", Vec3(0.04, 0.04, 0.04), 0.04, Vec3(0.005, 0.04 + height, 0.013)));
+    ExactPair pair(spec);
+    skin = pair.model.surface_skin;
+    pair.run(1);
+    double deepest = 0.0;
+    for (std::size_t k = 0; k < pair.scratch.contact_count; ++k) deepest = std::max(deepest, pair.scratch.contacts[k].depth);
+    return deepest;
+  };
+  double skin = 0.0;
+  const double in_front = deepest_push(0.2 * 0.01 * 0.04, skin);
+  REQUIRE(skin == Approx(0.01 * 0.04));  // 1 % of the 4 cm cells
+  CHECK(in_front == Approx(0.8 * skin).epsilon(1e-6));  // within the skin in front: out to it
+  CHECK(deepest_push(2.0 * skin, skin) == 0.0);           // beyond the skin: no contact
+}
+
 TEST_CASE("Accuracy: the exact level stops two planks crossing edge through edge, no vertex of either inside the other") {
   // A plank along x and one along z above it, falling onto it at 1 m/s: 12-triangle boxes,
   // whose vertices are their corners, 6 cm from where the planks meet, each in one lattice
