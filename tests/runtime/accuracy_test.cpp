@@ -341,6 +341,61 @@ TEST_CASE("Accuracy: the exact level keeps a skin between two objects' surfaces,
   CHECK(deepest_push(2.0 * skin, skin) == 0.0);           // beyond the skin: no contact
 }
 
+TEST_CASE("Accuracy: the exact level takes a vertex beside an acute edge, behind one face's plane and in front of the other, for outside") {
+  // A prism whose cross-section (x, z) is an equilateral triangle, 8 cm a side and 8 cm tall:
+  // along its vertical edges two faces meet at 60 degrees, their normals 120 degrees apart. A
+  // point 5 mm from such an edge, in the directions between the two normals, is closest to the
+  // edge, and near either normal it lies behind the other face's plane. A cube's corner put
+  // there, 5 degrees past the plane of one face and then of the other, is outside: no contact
+  // (the skin is 0.4 mm). Judged by the face that happened to be found first, one of the two
+  // read as 5.4 mm inside (a ring's vertex beside a letter's corner, in a random pile, was
+  // pushed into the floor every step so).
+  const double side = 0.08, height = 0.08, distance = 0.005;
+  const Vec3 corners[3] = {Vec3(0.0, 0.0, 0.0), Vec3(side, 0.0, 0.0), Vec3(0.5 * side, 0.0, 0.5 * std::sqrt(3.0) * side)};
+  SurfaceMesh prism;
+  for (int level = 0; level < 2; ++level)
+    for (const Vec3& c : corners) prism.vertices.push_back(c + Vec3(0.0, (level - 0.5) * height, 0.0));
+  const Vec3 centre = (corners[0] + corners[1] + corners[2]) / 3.0;
+  // Counter-clockwise seen from outside: flipped where the face normal points at the centre.
+  const auto add = [&](Index a, Index b, Index c) {
+    const Vec3 n = (prism.vertices[b] - prism.vertices[a]).cross(prism.vertices[c] - prism.vertices[a]);
+    if (n.dot(prism.vertices[a] - centre) < 0.0) std::swap(b, c);
+    prism.triangles.push_back({a, b, c});
+  };
+  add(0, 1, 2);
+  add(3, 4, 5);
+  for (Index k = 0; k < 3; ++k) {
+    const Index next = (k + 1) % 3;
+    add(k, next, next + 3);
+    add(k, next + 3, k + 3);
+  }
+  // Directions in (x, z) from the edge at corner 0: its faces' outward normals are at -90
+  // and 150 degrees, the edge's region of space between them, through 180.
+  for (const double degrees : {175.0, 245.0}) {
+    const double radians = degrees * M_PI / 180.0;
+    const Vec3 way(std::cos(radians), 0.0, std::sin(radians));
+    const Vec3 corner = distance * way;  // the cube's corner nearest the edge
+    const double cube = 0.02;
+    const Vec3 cube_centre = corner + 0.5 * cube * Vec3(way.x() < 0.0 ? -1.0 : 1.0, 1.0, way.z() < 0.0 ? -1.0 : 1.0);
+    SceneSpec spec;
+    spec.settings.effects = static_cast<EffectSet>(Effect::InterCollision);
+    ObjectSpec wedge = box_object("prism", Vec3::Ones(), 0.04, Vec3::Zero());
+    wedge.source = "prism";
+    wedge.mesh = prism;
+    spec.objects.push_back(wedge);
+    spec.objects.push_back(box_object("cube", Vec3::Constant(cube), 0.04, cube_centre));
+    ExactPair pair(spec);
+    // Behind one face's plane, in front of the other's.
+    const Vec3 bottom_normal(0.0, 0.0, -1.0), slope_normal(-0.5 * std::sqrt(3.0), 0.0, 0.5);
+    REQUIRE((way.dot(bottom_normal) < 0.0) != (way.dot(slope_normal) < 0.0));
+    REQUIRE(distance > 2.0 * pair.model.surface_skin);
+    REQUIRE(distance < pair.model.surface_contact_radius);
+    pair.run(1);
+    INFO(degrees << " degrees");
+    CHECK(pair.scratch.contact_count == 0);
+  }
+}
+
 TEST_CASE("Accuracy: the exact level stops two planks crossing edge through edge, no vertex of either inside the other") {
   // A plank along x and one along z above it, falling onto it at 1 m/s: 12-triangle boxes,
   // whose vertices are their corners, 6 cm from where the planks meet, each in one lattice
