@@ -291,10 +291,11 @@ bool cells_share_node(const Model& model, Index cell_a, Index cell_b) {
   return (model.cell_coord[cell_a] - model.cell_coord[cell_b]).cwiseAbs().maxCoeff() <= 1;
 }
 
-// Behind the face of the closest triangle (normal: its unnormalised face normal): inside.
-// Near a convex edge p - q lies between the faces' normals, and near a concave one an
-// outside point is closest to a face, so with the surface's true closest point an outside
-// vertex is not taken for an inside one.
+// Behind the face of the closest triangle (normal: its unnormalised face normal). Near a
+// concave edge an outside point is closest to a face, so the closest face tells. Where the
+// closest point is a corner or an edge, p - q lies between the normals of the faces that
+// share it, which at an acute corner (normals more than 90 degrees apart) may be behind one
+// of them: there behind_every_face_at() tells.
 bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
   return normal.squaredNorm() > 0.0 && (p - closest).dot(normal) < 0.0;
 }
@@ -302,9 +303,9 @@ bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
 // Where the closest point of the surface is a corner or an edge of triangle `tri` (`feature`),
 // p is behind the surface only if it is behind every triangle that shares that corner or edge:
 // the inside of a convex corner is where the insides of all its faces meet. Behind one face's
-// plane alone, a vertex 2.4 mm beside a letter's convex corner and in front of the other wall
-// read as 2.5 mm inside, and was pushed into the floor every step (a random pile, seed 4:
-// a ring kept jittering at 0.2 m/s).
+// plane alone, a vertex 2.4 mm beside a letter's acute corner (walls 86 degrees apart) and in
+// front of the other wall read as inside, and was pushed into the floor every step (a random
+// pile, seed 4: a ring kept jittering at up to 0.23 m/s).
 bool behind_every_face_at(const Model& model, const State& state, Scratch& scratch, const Vec3& p, const Vec3& closest,
                           Index tri, Feature feature) {
   const std::array<Index, 3>& corners = model.surface_triangles[tri];
@@ -342,10 +343,10 @@ bool cell_inverted(const Model& model, const State& state, Index cell) {
 }
 
 // Narrows (best_sq, best_point, best_normal, best_triangle, best_feature) to the closest
-// triangle of the cells sharing a
-// node with cell_a. For a pair of one object's cells, the cells that share a node with
-// cell_b are p's own surface and are left out, as the pair test leaves them out. Returns
-// false if the closest triangle lies in an inverted cell: then inside or outside is unknown.
+// triangle of the cells sharing a node with cell_a. For a pair of one object's cells, the
+// cells that share a node with cell_b are p's own surface and are left out, as the pair test
+// leaves them out. Returns false if the closest triangle lies in an inverted cell: then
+// inside or outside is unknown.
 bool closest_around(const Model& model, const State& state, Scratch& scratch, Index cell_a, Index cell_b, bool self,
                     Index v, const Vec3& p, double& best_sq, Vec3& best_point, Vec3& best_normal, Index& best_triangle,
                     Feature& best_feature) {
