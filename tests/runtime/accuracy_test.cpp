@@ -346,10 +346,10 @@ TEST_CASE("Accuracy: the exact level takes a vertex beside an acute edge, behind
   // along its vertical edges two faces meet at 60 degrees, their normals 120 degrees apart. A
   // point 5 mm from such an edge, in the directions between the two normals, is closest to the
   // edge, and near either normal it lies behind the other face's plane. A cube's corner put
-  // there, 5 degrees past the plane of one face and then of the other, is outside: no contact
-  // (the skin is 0.4 mm). Judged by the face that happened to be found first, one of the two
-  // read as 5.4 mm inside (a ring's vertex beside a letter's corner, in a random pile, was
-  // pushed into the floor every step so).
+  // there, 5 degrees behind the plane of one face and then of the other, is outside: no
+  // contact (the skin is 0.4 mm). Judged by the face that happened to be found first, one of
+  // the two read as 5 mm inside (a ring's vertex beside a letter's corner, in a random pile,
+  // was pushed into the floor every step so).
   const double side = 0.08, height = 0.08, distance = 0.005;
   const Vec3 corners[3] = {Vec3(0.0, 0.0, 0.0), Vec3(side, 0.0, 0.0), Vec3(0.5 * side, 0.0, 0.5 * std::sqrt(3.0) * side)};
   SurfaceMesh prism;
