@@ -94,6 +94,7 @@ Scratch make_scratch(const Model& model) {
     s.pair_hit.resize(s.pairs.size());
     s.pair_keys.resize(s.pairs.size());
     s.pair_sorted_keys.resize(s.pairs.size());
+    s.cell_pair_keys.resize(s.pairs.size());
     s.object_wave.resize(model.objects.size());
     s.object_turn.resize(model.objects.size());
     s.object_answered.resize(model.objects.size());
@@ -195,6 +196,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
   scratch.pair_hit.resize(scratch.pairs.size());
   scratch.pair_keys.resize(scratch.pairs.size());
   scratch.pair_sorted_keys.resize(scratch.pairs.size());
+  scratch.cell_pair_keys.resize(scratch.pairs.size());
   size_waves(scratch);
 }
 
@@ -214,19 +216,22 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
-  // Level 5's edge contacts (paper's response only) read where the step started.
-  if (level.exact && state.params.response == ContactResponse::Paper)
+  // The exact edge contacts of levels 4 and 5 (paper's response only) read where the step
+  // started.
+  const bool exact_edges = (level.exact || level.boxes == &model.sub_boxes) && state.params.response == ContactResponse::Paper;
+  if (exact_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
   if (scratch.pool) scratch.pool->begin_step();
-  // At the exact level under the paper's response the planes answer before the surfaces, so
-  // that the last word of a step is the contacts between objects: answered after them, a floor
-  // lifting a resting torus pushed it back into the ring on top, which the narrow phase had
-  // just parted from it, and the two stayed crossed edge through edge for 1.6 s (a random
-  // pile, seed 4). What the objects' pushes leave below a plane, it answers next step.
+  // Where the exact edges answer (levels 4 and 5, the paper's response) the planes answer
+  // before the surfaces, so that the last word of a step is the contacts between objects:
+  // answered after them, a floor lifting a resting torus pushed it back into the ring on top,
+  // which the narrow phase had just parted from it, and the two stayed crossed edge through
+  // edge for 1.6 s (level 5, a random pile, seed 4). What the objects' pushes leave below a
+  // plane, it answers next step.
   std::array<Stage, kStageCount> order{};
   std::size_t stage_count = 0;
-  const bool planes_first = level.exact && !solver;
+  const bool planes_first = exact_edges && !solver;
   for (Stage stage : model.pipeline) {
     if (planes_first && stage == Stage::Planes) continue;
     if (planes_first && stage == Stage::NarrowPhase &&

@@ -156,10 +156,13 @@ struct Scratch {
   WorkerPool* pool = nullptr;
   // Dynamics.
   std::vector<Vec3> x_prev;        // positions at the start of the step
-  // Level 5 under the paper's response only: the lattice as the step found it, before
+  // Levels 4 and 5 under the paper's response only: the lattice as the step found it, before
   // dynamics and responses; which side of a triangle an edge came from (collision.cpp,
   // test_edges).
   std::vector<Vec3> x_start;
+  // Level 4 under the paper's response: the pairs of cells of two objects among the candidate
+  // pairs of sub-boxes, (lower << 32 | higher), sorted so that each pair is answered once.
+  std::vector<std::uint64_t> cell_pair_keys;  // capacity: that of pairs
   std::vector<double> lambda;      // XPBD Lagrange multipliers, one per spring
   std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
   std::vector<double> cell_shape_lambda;   // XPBD Lagrange multipliers, one per cell (shape)
