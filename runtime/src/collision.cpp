@@ -17,14 +17,14 @@ namespace ffd {
 
 BoxLevel box_level(const Model& model, Accuracy accuracy) {
   switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false};
-    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false};
-    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true};
+    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, false};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, false};
+    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, false};
+    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, false};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, true};
+    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, true};
   }
-  return {&model.boxes, 0, 9, false, false};
+  return {&model.boxes, 0, 9, false, false, false};
 }
 
 namespace {
@@ -214,6 +214,12 @@ void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch
 Vec3 surface_vertex(const Model& model, const std::vector<Vec3>& x, Index v) {
   const std::array<Index, 8>& corner = model.cell_nodes[model.surface_vertex_cell[v]];
   return trilinear_map(model.surface_vertex_local[v], [&](int j) -> const Vec3& { return x[corner[j]]; });
+}
+
+// The surface cache is stale: the lattice moved since the last surface tests.
+void begin_surface_tests(Scratch& scratch) {
+  std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
+  scratch.surface_step_epoch = ++scratch.surface_epoch;
 }
 
 // Maps the surface vertices of `cell` (and their AABB) into the level-5 cache.
@@ -698,8 +704,7 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
 template <bool kFriction>
 void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
                           StageCounters& counters, double& max_depth) {
-  std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
-  scratch.surface_step_epoch = ++scratch.surface_epoch;
+  begin_surface_tests(scratch);
   std::uint64_t* keys = scratch.cell_pair_keys.data();
   Index count = 0;
   for (Index p = 0; p < scratch.pair_count; ++p) {
@@ -947,14 +952,13 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
   }
   if (detecting || pairs == 0) scratch.narrow_retested_share = pairs ? static_cast<double>(retested) / pairs : 0.0;
   else scratch.narrow_retested_share *= 0.9;  // try the detection again now and then
-  if (&boxes == &model.sub_boxes) answer_crossed_edges<kFriction>(model, boxes, state, scratch, counters, max_depth);
+  if (level.edges) answer_crossed_edges<kFriction>(model, boxes, state, scratch, counters, max_depth);
 }
 
 template <bool kFriction>
 void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = model.boxes;
-  std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
-  scratch.surface_step_epoch = ++scratch.surface_epoch;
+  begin_surface_tests(scratch);
   for (Index p = 0; p < scratch.pair_count; ++p) {
     const Index c1 = boxes.box_cell[scratch.pairs[p].a], c2 = boxes.box_cell[scratch.pairs[p].b];
     if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;

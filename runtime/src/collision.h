@@ -15,6 +15,9 @@ struct BoxLevel {
   int end_node;
   bool samples;      // also Model::box_samples, the surface nodes (level 3)
   bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
+  // Levels 4 and 5 under the paper's response: the exact surfaces' edges against the other
+  // object's triangles too (collision.cpp, test_edges), and the planes answered first (step.cpp).
+  bool edges;
 };
 BoxLevel box_level(const Model& model, Accuracy accuracy);
 

@@ -218,7 +218,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
   // The exact edge contacts of levels 4 and 5 (paper's response only) read where the step
   // started.
-  const bool exact_edges = (level.exact || level.boxes == &model.sub_boxes) && state.params.response == ContactResponse::Paper;
+  const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
   if (exact_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse

@@ -179,8 +179,9 @@ struct Model {
   std::vector<std::array<Index, 2>> cell_edges;
   double surface_contact_radius = 0.0;  // m, deepest penetration the exact level sees
   // m, the gap the exact level keeps between the surfaces of two objects: a vertex this
-  // close in front of a triangle is a contact too, and goes out to it. Pushed only to the face, a vertex lies on
-  // it, and the surfaces touch (they intersect: share a point) until they part.
+  // close in front of a triangle is a contact too, and goes out to it. Pushed only to the
+  // face, a vertex lies on it, and the surfaces touch (they intersect: share a point) until
+  // they part.
   double surface_skin = 0.0;
   double box_skin = 0.0;  // m, "box_overlap": the gap kept between boxes of two objects (0: off)
   std::uint32_t sleep_steps = 0;         // "sleeping": sleep_time in steps (>= 1)
