@@ -16,15 +16,16 @@
 namespace ffd {
 
 BoxLevel box_level(const Model& model, Accuracy accuracy) {
+  const double skin = model.box_skin;
   switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, false};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, false};
-    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, false};
-    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, false};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, true};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, true};
+    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, false, skin};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, false, skin};
+    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, false, skin};
+    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, false, skin};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, true, std::max(skin, model.sub_box_skin)};
+    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, true, skin};
   }
-  return {&model.boxes, 0, 9, false, false, false};
+  return {&model.boxes, 0, 9, false, false, false, skin};
 }
 
 namespace {
@@ -181,8 +182,9 @@ void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch
     counters.node_tests += node_count;  // tested and found nothing: a degenerate box contains no node
     return;
   }
-  // "box_overlap": boxes of two objects hold each other's nodes a skin away from their faces.
-  const double skin = self ? 0.0 : model.box_skin;
+  // Boxes of two objects hold each other's nodes a skin away from their faces (level 4,
+  // "box_overlap").
+  const double skin = self ? 0.0 : level.skin;
   for (double& offset : planes.offset) offset += skin;
   const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
   Vec3 relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
@@ -912,11 +914,12 @@ void find_pair_hits(const Model& model, const BoxLevel& level, const State& stat
     for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
       const BoxPair& pair = scratch.pairs[p];
       const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
-      const double skin = o1 != o2 ? model.box_skin : 0.0;  // "box_overlap"
+      const bool other = o1 != o2;
+      const double skin = other ? level.skin : 0.0;
       scratch.pair_hit[p] = (state.asleep[o1] && state.asleep[o2]) ||
                             nodes_near(model, level, state, scratch, pair.a, pair.b, margin + skin) ||
                             nodes_near(model, level, state, scratch, pair.b, pair.a, margin + skin) ||
-                            (skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, skin).overlapping);
+                            (other && model.box_skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping);
     }
   };
   const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;

@@ -18,6 +18,9 @@ struct BoxLevel {
   // Levels 4 and 5 under the paper's response: the exact surfaces' edges against the other
   // object's triangles too (collision.cpp, test_edges), and the planes answered first (step.cpp).
   bool edges;
+  // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
+  // Model::sub_box_skin at level 4, else Model::box_skin ("box_overlap"; 0 when off).
+  double skin;
 };
 BoxLevel box_level(const Model& model, Accuracy accuracy);
 

@@ -89,6 +89,7 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
   }
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
   model.surface_skin = std::isfinite(finest_cell) ? 0.01 * finest_cell : 0.0;  // as box_skin
+  model.sub_box_skin = std::isfinite(finest_cell) ? kSubBoxSkinShare * finest_cell : 0.0;
 }
 
 void validate(const SceneSpec& spec) {

@@ -256,8 +256,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         break;
       case Stage::BroadPhase: {
         // The exact level pairs cells whose boxes come within its contact radius.
-        // "box_overlap" (the paper's response): boxes of two objects come within its skin.
-        const double margin = level.exact ? model.surface_contact_radius : solver ? kSpeculativeDistance : model.box_skin;
+        // The paper's response: boxes of two objects come within the level's skin.
+        const double margin = level.exact ? model.surface_contact_radius : solver ? kSpeculativeDistance : level.skin;
         if (sleeping(model)) set_wake_margins(model, *level.boxes, state, scratch);
         grow_box_bounds(model, *level.boxes, margin, scratch);
         report.hash_overflow = !find_candidate_pairs(model, level, state, scratch, counters);
