@@ -19,7 +19,8 @@ struct BoxLevel {
   // object's triangles too (collision.cpp, test_edges), and the planes answered first (step.cpp).
   bool edges;
   // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
-  // Model::sub_box_skin at level 4, else Model::box_skin ("box_overlap"; 0 when off).
+  // Model::box_skin ("box_overlap"; 0 when off), at level 4 the larger of it and
+  // Model::sub_box_skin.
   double skin;
 };
 BoxLevel box_level(const Model& model, Accuracy accuracy);
