@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "support/run_ffdsim.h"
@@ -96,6 +97,15 @@ TEST_CASE("Exit codes: piles", "[cli]") {
   check_exit("piles --levels 9", 1, "--levels: Value 9 not in range");
   check_exit("piles --responses exact", 1, "--responses");
   check_exit("piles --seeds 1 --levels 2 --update-readme missing_readme.md", 2, "missing_readme.md");
+  // --require-clean's failing path: one second of pile 1 at level 2 ends with its letters
+  // crossed and still falling, so the check fails and the pile is listed with its reasons.
+  const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_piles");
+  check_exit("piles -q --seeds 1 --levels 2 --responses paper --steps 1000 --require-clean --out " + dir.string(), 4,
+             "check failed: 1 of 1 runs not clean");
+  std::ifstream table(dir / "piles.md");
+  const std::string written((std::istreambuf_iterator<char>(table)), std::istreambuf_iterator<char>());
+  CHECK_THAT(written, Catch::Contains("- pile 1, paper level 2: not at rest at the end;"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("Exit codes: device-sim", "[cli][device][realtime]") {
