@@ -635,6 +635,7 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
   double deepest = 0.0;
   Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
   Index carrier_a = cell_a, carrier_b = cell_b;
+  bool deepest_fresh = false;  // the deepest crossing was made during this step
   for (Index e = edge_begin; e < edge_end; ++e) {
     const std::array<Index, 2>& edge = model.cell_edges[e];
     const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
@@ -656,7 +657,8 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
                              surface_vertex(model, x0, tri[2])};
       Vec3 normal;
       double depth = 0.0;
-      if (segment_crosses_triangle(start[0], start[1], start[2], start[3], start[4])) {
+      const bool crossed_at_start = segment_crosses_triangle(start[0], start[1], start[2], start[3], start[4]);
+      if (crossed_at_start) {
         if (!crossed_way_out(now, model.surface_contact_radius, normal, depth)) continue;
       } else if (!edge_way_back(now, start, model.surface_contact_radius, normal, depth)) {
         continue;
@@ -664,6 +666,7 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
       if (!(depth > deepest)) continue;
       deepest = depth;
       deepest_normal = normal;
+      deepest_fresh = !crossed_at_start;
       // Where the edge meets the triangle's plane, and the cells that carry the two there:
       // the edge's end and the triangle's corner nearest to it (a long edge's ends, and so
       // what moves it, may be cells away from the pair's cells).
@@ -692,8 +695,13 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
   ++counters.inter_contacts;
   max_depth = std::max(max_depth, deepest);
   scratch.record_contact(deepest_point, deepest_normal, deepest, ContactKind::Inter);
-  // No rebound, as test_vertices; past the face by the skin, as a vertex is put.
-  respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest + model.surface_skin, false);
+  // Past the face by the skin, as a vertex is put. A crossing made during this step is a
+  // fresh contact and also rebounds (response.h; nothing at alpha = 1): moved out without
+  // it, the edge kept (1 - alpha) of its approach and crossed again the next step, and at
+  // level 4 the pushes fed energy in (alpha_beta_zero at level 4: 0.17 J gained, a node at
+  // 5.1 m/s). One crossed already does not: its normal says little about how it got in.
+  respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest + model.surface_skin,
+                          deepest_fresh);
   invalidate_surface_around(model, scratch, carrier_a);
   invalidate_surface_around(model, scratch, carrier_b);
 }
