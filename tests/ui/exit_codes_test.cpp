@@ -3,7 +3,6 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <string>
 
 #include "support/run_ffdsim.h"
@@ -102,9 +101,7 @@ TEST_CASE("Exit codes: piles", "[cli]") {
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_piles");
   check_exit("piles -q --seeds 1 --levels 2 --responses paper --steps 1000 --require-clean --out " + dir.string(), 4,
              "check failed: 1 of 1 runs not clean");
-  std::ifstream table(dir / "piles.md");
-  const std::string written((std::istreambuf_iterator<char>(table)), std::istreambuf_iterator<char>());
-  CHECK_THAT(written, Catch::Contains("- pile 1, paper level 2: not at rest at the end;"));
+  CHECK_THAT(test::read_text(dir / "piles.md"), Catch::Contains("- pile 1, paper level 2: not at rest at the end;"));
   std::filesystem::remove_all(dir);
 }
 
