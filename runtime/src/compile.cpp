@@ -87,6 +87,33 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
     model.cell_edges.insert(model.cell_edges.end(), edges.begin(), edges.end());
     model.cell_edge_begin.push_back(static_cast<Index>(model.cell_edges.size()));
   }
+  // Each triangle owned by the cell its first corner is bound to (the next corner's if that
+  // cell has no box: a vertex on a cell's face), and the owned triangles' edges.
+  const auto has_boxes = [&](Index c) {
+    return model.boxes.cell_box_begin[c + 1] > model.boxes.cell_box_begin[c] &&
+           model.grid_boxes.cell_box_begin[c + 1] > model.grid_boxes.cell_box_begin[c];
+  };
+  std::vector<std::vector<Index>> owned(model.cell_count());
+  for (std::size_t t = 0; t < model.surface_triangles.size(); ++t) {
+    const std::array<Index, 3>& tri = model.surface_triangles[t];
+    Index owner = model.surface_vertex_cell[tri[0]];
+    for (int k = 2; k >= 0; --k)
+      if (has_boxes(model.surface_vertex_cell[tri[k]])) owner = model.surface_vertex_cell[tri[k]];
+    owned[owner].push_back(static_cast<Index>(t));
+  }
+  flatten(owned, model.cell_owned_triangle_begin, model.cell_owned_triangles);
+  model.cell_owned_edge_begin.push_back(0);
+  for (const auto& row : owned) {
+    edges.clear();
+    for (Index t : row) {
+      const std::array<Index, 3>& tri = model.surface_triangles[t];
+      for (int k = 0; k < 3; ++k) edges.push_back({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])});
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    model.cell_owned_edges.insert(model.cell_owned_edges.end(), edges.begin(), edges.end());
+    model.cell_owned_edge_begin.push_back(static_cast<Index>(model.cell_owned_edges.size()));
+  }
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
   model.surface_skin = std::isfinite(finest_cell) ? 0.01 * finest_cell : 0.0;  // as box_skin
   model.sub_box_skin = std::isfinite(finest_cell) ? kSubBoxSkinShare * finest_cell : 0.0;

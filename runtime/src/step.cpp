@@ -81,6 +81,8 @@ Scratch make_scratch(const Model& model) {
   for (int axis = 0; axis < 3; ++axis) {
     s.box_lo[axis].resize(boxes);
     s.box_hi[axis].resize(boxes);
+    s.surface_lo[axis].resize(boxes);
+    s.surface_hi[axis].resize(boxes);
   }
   if (sleeping(model)) s.box_wake_margin.assign(boxes, 0.0);
   if (model.collides) {
@@ -137,6 +139,9 @@ Scratch make_scratch(const Model& model) {
   std::size_t most_triangles = 0;
   for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
     most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);
+  for (Index c = 0; c + 1 < model.cell_owned_triangle_begin.size(); ++c)
+    most_triangles = std::max<std::size_t>(most_triangles,
+                                           model.cell_owned_triangle_begin[c + 1] - model.cell_owned_triangle_begin[c]);
   s.triangle_corners.resize(3 * most_triangles);
   s.triangle_min.resize(most_triangles);
   s.triangle_max.resize(most_triangles);
@@ -216,19 +221,21 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
-  // The exact edge contacts of levels 4 and 5 (paper's response only) read where the step
-  // started.
-  const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
+  // The exact edge contacts (levels 4 and 5, and 0-3 with edge_contacts; the paper's response
+  // only) read where the step started. They are between objects: without inter-collision
+  // there are none, and the stages keep their order.
+  const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper &&
+                           has(model.settings.effects, Effect::InterCollision);
   if (exact_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
   if (scratch.pool) scratch.pool->begin_step();
-  // Where the exact edges answer (levels 4 and 5, the paper's response) the planes answer
-  // before the surfaces, so that the last word of a step is the contacts between objects:
-  // answered after them, a floor lifting a resting torus pushed it back into the ring on top,
-  // which the narrow phase had just parted from it, and the two stayed crossed edge through
-  // edge for 1.6 s (level 5, a random pile, seed 4). What the objects' pushes leave below a
-  // plane, it answers next step.
+  // Where the exact edges answer (levels 4 and 5, and 0-3 with edge_contacts; the paper's
+  // response) the planes answer before the surfaces, so that the last word of a step is the
+  // contacts between objects: answered after them, a floor lifting a resting torus pushed it
+  // back into the ring on top, which the narrow phase had just parted from it, and the two
+  // stayed crossed edge through edge for 1.6 s (level 5, a random pile, seed 4). What the
+  // objects' pushes leave below a plane, it answers next step.
   std::array<Stage, kStageCount> order{};
   std::size_t stage_count = 0;
   const bool planes_first = exact_edges && !solver;
@@ -275,6 +282,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         } else {
           if (friction) collide_boxes<true>(model, level, state, scratch, counters, depth);
           else collide_boxes<false>(model, level, state, scratch, counters, depth);
+          // The edge contacts' own pairs (levels 0-3) may overflow too: grown between steps.
+          if (scratch.pairs_dropped) report.hash_overflow = true;
         }
         break;
       }

@@ -1,6 +1,8 @@
-// [simulation] box_overlap: boxes of two objects kept apart as wholes (box_test.h,
-// box_overlap), with a skin, where node-in-box tests let thin boxes cross like an X. (Its
-// determinism over thread counts: determinism_test.cpp.)
+// Two scene options for where node-in-box tests let thin boxes cross like an X: [simulation]
+// box_overlap, boxes of two objects kept apart as wholes (box_test.h, box_overlap) with a
+// skin; and [simulation] edge_contacts, the exact surfaces' crossed edges sent back as at
+// levels 4 and 5 (collision.cpp, test_edges). (Their determinism over thread counts:
+// determinism_test.cpp.)
 #include <catch2/catch.hpp>
 
 #include "ffd/command.h"
@@ -18,13 +20,15 @@ namespace {
 
 // A random pile of two: a letter P dropped onto a 6 mm plate (seed 5), at level 2 under the
 // paper's response.
-Model letter_on_plate(bool box_overlap) {
+Model letter_on_plate(bool box_overlap, bool edge_contacts = false) {
   PileOptions options;
   options.seed = 5;
   options.objects = 2;
   options.box_overlap = box_overlap;
+  options.edge_contacts = edge_contacts;
   const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_5.toml", "");
   REQUIRE(spec.settings.box_overlap == box_overlap);
+  REQUIRE(spec.settings.edge_contacts == edge_contacts);
   std::vector<std::string> log;
   return compile_scene(spec, "pile_5.toml", log);
 }
@@ -63,6 +67,45 @@ TEST_CASE("Box overlap: a letter dropped on a thin plate at level 2 rests crosse
   const Model model = letter_on_plate(true);
   CHECK(model.box_skin == Approx(1e-4));  // 1 % of the 1 cm cells
   CHECK(crossing_at_the_end(model) == 0);
+}
+
+TEST_CASE("Edge contacts: a letter dropped on a thin plate at level 2 rests apart from it with them", "[box_overlap]") {
+  // Without them it rests crossed through the plate (the test above).
+  CHECK(crossing_at_the_end(letter_on_plate(false, true)) == 0);
+}
+
+TEST_CASE("Edge contacts: faces of two triangles each, across 400 cells, are tested once per pair of triangles",
+          "[box_overlap]") {
+  // Two 20 x 1.5 x 20 cm slabs of 1 cm cells, the upper one resting on the lower: each face
+  // of a box mesh is 2 triangles, which cross every cell under them. Tested by the cells they
+  // cross, each pair of triangles was tested by some 160,000 pairs of cells a step; by the
+  // cells that own them, by a few.
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision;
+  spec.settings.alpha = 1.0;
+  spec.settings.edge_contacts = true;
+  spec.planes.push_back(test::floor_plane());
+  spec.objects.push_back(test::box_object("lower", Vec3(0.2, 0.015, 0.2), 0.01, Vec3(0.0, 0.0075, 0.0)));
+  spec.objects.push_back(test::box_object("upper", Vec3(0.2, 0.015, 0.2), 0.01, Vec3(0.0, 0.0226, 0.0)));
+  const Model model = test::compile_quietly(spec);
+  std::size_t owned = 0, owners = 0;
+  for (Index c = 0; c < model.cell_count(); ++c) {
+    const Index count = model.cell_owned_triangle_begin[c + 1] - model.cell_owned_triangle_begin[c];
+    owned += count;
+    owners += count > 0 ? 1 : 0;
+  }
+  CHECK(owned == model.surface_triangles.size());  // each triangle once
+  CHECK(owners <= 16);                              // 24 triangles, their first corners at the 8 corners of each box
+  State state = start(model);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  for (int i = 1; i <= 300; ++i) {
+    step(model, state, scratch, report);
+    REQUIRE(report.finite);
+  }
+  // The upper slab rests on the lower one, no surface through the other.
+  CHECK(SurfaceIntersections(model).count(state).total() == 0);
+  CHECK(centre_of_mass(model, state.x, 1).y() > 0.015 + 0.0075 - 0.001);  // on the lower slab, not in it
 }
 
 TEST_CASE("Box overlap: a flat box resting on another keeps the skin between their faces, which then never touch",

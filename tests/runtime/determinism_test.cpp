@@ -119,6 +119,16 @@ TEST_CASE("Determinism: a random pile with box_overlap gives the same states on 
   check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
 }
 
+TEST_CASE("Determinism: a random pile with edge_contacts gives the same states on 1, 2 and 8 threads at every level",
+          "[determinism]") {
+  PileOptions options;
+  options.seed = 1;
+  options.edge_contacts = true;
+  const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_1.toml", "");
+  REQUIRE(spec.settings.edge_contacts);
+  check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
+}
+
 TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, gives the same states and contacts",
           "[determinism]") {
   // 48 boxes of 8 cells in a column of 4 x 4 layers, each touching its neighbours from the

@@ -37,6 +37,11 @@ TEST_CASE("a random pile is the same for the same seed and differs between seeds
   options.box_overlap = true;
   CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.box_overlap);
   options.box_overlap = false;
+  // So is edge_contacts.
+  CHECK(first.find("edge_contacts") == std::string::npos);
+  options.edge_contacts = true;
+  CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.edge_contacts);
+  options.edge_contacts = false;
   options.objects = 0;
   CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
   options.objects = 6;

@@ -24,9 +24,11 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
   return true;
 }
 
-// A row's response as the table names it: "paper", "paper + box_overlap", "solver".
-std::string response_label(ffd::ContactResponse response, bool box_overlap) {
-  return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "");
+// A row's response as the table names it: "paper", "paper + box_overlap", "paper +
+// edge_contacts", "solver".
+std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts) {
+  return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "") +
+         (edge_contacts ? " + edge_contacts" : "");
 }
 
 }  // namespace
@@ -38,6 +40,7 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
   run.level = level;
   run.response = response;
   run.box_overlap = model.settings.box_overlap;
+  run.edge_contacts = model.settings.edge_contacts;
   run.steps = steps;
   run.sample_every = sample_every;
   ffd::State state = initial_state_at(model, level, response);
@@ -97,10 +100,10 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
 
 std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& cpu, int objects) {
   if (runs.empty()) return "No piles were run.\n";
-  std::vector<std::tuple<ffd::ContactResponse, bool, ffd::Accuracy>> keys;
+  std::vector<std::tuple<ffd::ContactResponse, bool, bool, ffd::Accuracy>> keys;
   std::vector<std::uint64_t> seeds;
   for (const PileRun& r : runs) {
-    const std::tuple key{r.response, r.box_overlap, r.level};
+    const std::tuple key{r.response, r.box_overlap, r.edge_contacts, r.level};
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
     if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
   }
@@ -118,12 +121,14 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
        "crossing: the longest time one pair of objects (or one object with itself) stayed crossed.\n\n";
   s << "| Response | Level | Clean piles | Pairs, mean of piles' max | Pairs in the last second, max | Longest crossing "
        "| Step p50 / p99 |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& [response, box_overlap, level] : keys) {
+  for (const auto& [response, box_overlap, edge_contacts, level] : keys) {
     std::size_t clean = 0, count = 0, last_max = 0;
     double max_sum = 0.0, longest = 0.0, p50 = 0.0, p99 = 0.0;
     const PileRun* longest_run = nullptr;
     for (const PileRun& r : runs) {
-      if (r.response != response || r.box_overlap != box_overlap || r.level != level) continue;
+      if (r.response != response || r.box_overlap != box_overlap || r.edge_contacts != edge_contacts ||
+          r.level != level)
+        continue;
       ++count;
       clean += r.clean() ? 1 : 0;
       max_sum += static_cast<double>(r.pairs_max);
@@ -135,7 +140,7 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
       p50 += r.step_p50_ms;
       p99 = std::max(p99, r.step_p99_ms);
     }
-    s << "| " << response_label(response, box_overlap) << " | " << static_cast<int>(level) << " "
+    s << "| " << response_label(response, box_overlap, edge_contacts) << " | " << static_cast<int>(level) << " "
       << ffd::accuracy_name(level) << " | " << clean << " / " << count << " | "
       << fixed(max_sum / static_cast<double>(count), 1) << " | " << last_max << " | "
       << (longest > 0.0 ? fixed(longest, 0) + " ms (pile " + std::to_string(longest_run->seed) + ": " +
@@ -153,7 +158,7 @@ std::string markdown_unclean_piles(const std::vector<PileRun>& runs) {
     if (r.clean()) continue;
     if (!header) s << "Piles that are not clean:\n\n";
     header = true;
-    s << "- pile " << r.seed << ", " << response_label(r.response, r.box_overlap) << " level "
+    s << "- pile " << r.seed << ", " << response_label(r.response, r.box_overlap, r.edge_contacts) << " level "
       << static_cast<int>(r.level) << ": " << (r.finite ? "" : "NOT FINITE; ")
       << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max << " pairs in the last second (max "
       << r.pairs_max << "), longest crossing " << fixed(r.longest_crossing_ms, 0)
@@ -169,6 +174,7 @@ nlohmann::json to_json(const std::vector<PileRun>& runs) {
                    {"level", static_cast<int>(r.level)},
                    {"response", ffd::response_name(r.response)},
                    {"box_overlap", r.box_overlap},
+                   {"edge_contacts", r.edge_contacts},
                    {"steps", r.steps},
                    {"sample_every_steps", r.sample_every},
                    {"pairs", r.pairs},

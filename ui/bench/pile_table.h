@@ -16,7 +16,8 @@ struct PileRun {
   std::uint64_t seed = 0;
   ffd::Accuracy level = ffd::Accuracy::CentreOfMass;
   ffd::ContactResponse response = ffd::ContactResponse::Paper;
-  bool box_overlap = false;  // the scene's [simulation] box_overlap
+  bool box_overlap = false;    // the scene's [simulation] box_overlap
+  bool edge_contacts = false;  // the scene's [simulation] edge_contacts
   std::uint64_t steps = 0, sample_every = 0;
   // Intersecting triangle pairs (surface_intersections.h: between objects and within one,
   // rest-shape pairs left out) every `sample_every` steps, from the start.

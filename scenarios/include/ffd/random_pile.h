@@ -17,7 +17,8 @@ struct PileOptions {
   int min_cells = 3, max_cells = 12;
   // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
   std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
-  bool box_overlap = false;  // written as [simulation] box_overlap = true
+  bool box_overlap = false;    // written as [simulation] box_overlap = true
+  bool edge_contacts = false;  // written as [simulation] edge_contacts = true
 };
 
 // The scene: `objects` objects of random shape, size and orientation in a column above a
