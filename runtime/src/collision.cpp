@@ -266,16 +266,25 @@ bool triangle_bounds_valid(const Model& model, const Scratch& scratch, Index cel
   return true;
 }
 
+// AABB of the corners of triangles[begin, end) as the lattice is now (empty: lo > hi).
+void triangles_bounds(const Model& model, const State& state, Scratch& scratch, const std::vector<Index>& triangles,
+                      Index begin, Index end, Vec3& lo, Vec3& hi) {
+  lo = Vec3::Constant(INFINITY);
+  hi = Vec3::Constant(-INFINITY);
+  for (Index t = begin; t < end; ++t)
+    for (Index v : model.surface_triangles[triangles[t]]) {
+      const Vec3& p = cached_vertex(model, state, scratch, v);
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+}
+
 // AABB of the corners of the triangles of `cell`, from the cache.
 void cell_triangle_bounds(const Model& model, const State& state, Scratch& scratch, Index cell, Vec3& lo, Vec3& hi) {
   if (!triangle_bounds_valid(model, scratch, cell)) {
-    Vec3 l = Vec3::Constant(INFINITY), h = Vec3::Constant(-INFINITY);
-    for (Index t = model.cell_triangle_begin[cell]; t < model.cell_triangle_begin[cell + 1]; ++t)
-      for (Index v : model.surface_triangles[model.cell_triangles[t]]) {
-        const Vec3& p = cached_vertex(model, state, scratch, v);
-        l = l.cwiseMin(p);
-        h = h.cwiseMax(p);
-      }
+    Vec3 l, h;
+    triangles_bounds(model, state, scratch, model.cell_triangles, model.cell_triangle_begin[cell],
+                     model.cell_triangle_begin[cell + 1], l, h);
     scratch.cell_triangle_min[cell] = l;
     scratch.cell_triangle_max[cell] = h;
     scratch.cell_triangle_stamp[cell] = scratch.surface_epoch;
@@ -755,13 +764,9 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
                              StageCounters& counters) {
   for (Index b = 0; b < boxes.size(); ++b) {
     const Index cell = boxes.box_cell[b];
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-    for (Index t = model.cell_owned_triangle_begin[cell]; t < model.cell_owned_triangle_begin[cell + 1]; ++t)
-      for (Index v : model.surface_triangles[model.cell_owned_triangles[t]]) {
-        const Vec3& p = cached_vertex(model, state, scratch, v);
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-      }
+    Vec3 lo, hi;
+    triangles_bounds(model, state, scratch, model.cell_owned_triangles, model.cell_owned_triangle_begin[cell],
+                     model.cell_owned_triangle_begin[cell + 1], lo, hi);
     const bool has_triangles = (lo.array() <= hi.array()).all();
     for (int axis = 0; axis < 3; ++axis) {
       scratch.surface_lo[axis][b] = has_triangles ? lo[axis] : scratch.box_lo[axis][b];

@@ -72,23 +72,29 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
     sources[c].erase(std::unique(sources[c].begin(), sources[c].end()), sources[c].end());
   }
   flatten(sources, model.cell_triangle_source_begin, model.cell_triangle_sources);
-  // Per cell, the edges of its triangles, each once: an edge crossing another surface inside
-  // the cell is tested when the cell's box meets that surface's.
-  model.cell_edge_begin.push_back(0);
-  std::vector<std::array<Index, 2>> edges;
-  for (const auto& row : cell_triangles) {
-    edges.clear();
-    for (Index t : row) {
-      const std::array<Index, 3>& tri = model.surface_triangles[t];
-      for (int k = 0; k < 3; ++k) edges.push_back({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])});
+  // Per cell of `rows` (its triangles), the edges of its triangles, each once.
+  const auto flatten_edges = [&](const std::vector<std::vector<Index>>& rows, std::vector<Index>& begin,
+                                 std::vector<std::array<Index, 2>>& items) {
+    begin.push_back(0);
+    std::vector<std::array<Index, 2>> edges;
+    for (const auto& row : rows) {
+      edges.clear();
+      for (Index t : row) {
+        const std::array<Index, 3>& tri = model.surface_triangles[t];
+        for (int k = 0; k < 3; ++k)
+          edges.push_back({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])});
+      }
+      std::sort(edges.begin(), edges.end());
+      edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+      items.insert(items.end(), edges.begin(), edges.end());
+      begin.push_back(static_cast<Index>(items.size()));
     }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    model.cell_edges.insert(model.cell_edges.end(), edges.begin(), edges.end());
-    model.cell_edge_begin.push_back(static_cast<Index>(model.cell_edges.size()));
-  }
+  };
+  // An edge crossing another surface inside a cell is tested when the cell's box meets that
+  // surface's (level 4).
+  flatten_edges(cell_triangles, model.cell_edge_begin, model.cell_edges);
   // Each triangle owned by the cell its first corner is bound to (the next corner's if that
-  // cell has no box: a vertex on a cell's face), and the owned triangles' edges.
+  // cell has no box: a vertex on a cell's face), and the owned triangles' edges (levels 0-3).
   const auto has_boxes = [&](Index c) {
     return model.boxes.cell_box_begin[c + 1] > model.boxes.cell_box_begin[c] &&
            model.grid_boxes.cell_box_begin[c + 1] > model.grid_boxes.cell_box_begin[c];
@@ -102,18 +108,7 @@ void build_exact_surfaces(Model& model, const std::vector<std::vector<std::vecto
     owned[owner].push_back(static_cast<Index>(t));
   }
   flatten(owned, model.cell_owned_triangle_begin, model.cell_owned_triangles);
-  model.cell_owned_edge_begin.push_back(0);
-  for (const auto& row : owned) {
-    edges.clear();
-    for (Index t : row) {
-      const std::array<Index, 3>& tri = model.surface_triangles[t];
-      for (int k = 0; k < 3; ++k) edges.push_back({std::min(tri[k], tri[(k + 1) % 3]), std::max(tri[k], tri[(k + 1) % 3])});
-    }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    model.cell_owned_edges.insert(model.cell_owned_edges.end(), edges.begin(), edges.end());
-    model.cell_owned_edge_begin.push_back(static_cast<Index>(model.cell_owned_edges.size()));
-  }
+  flatten_edges(owned, model.cell_owned_edge_begin, model.cell_owned_edges);
   model.surface_contact_radius = std::isfinite(finest_cell) ? 0.25 * finest_cell : 0.0;
   model.surface_skin = std::isfinite(finest_cell) ? 0.01 * finest_cell : 0.0;  // as box_skin
   model.sub_box_skin = std::isfinite(finest_cell) ? kSubBoxSkinShare * finest_cell : 0.0;

@@ -109,24 +109,18 @@ TEST_CASE("Determinism: corotated cells give the same states on 1, 2 and 8 threa
   }
 }
 
-TEST_CASE("Determinism: a random pile with box_overlap gives the same states on 1, 2 and 8 threads at every level",
+TEST_CASE("Determinism: a random pile with box_overlap, and one with edge_contacts, give the same states on 1, 2 "
+          "and 8 threads at every level",
           "[determinism]") {
-  PileOptions options;
-  options.seed = 1;
-  options.box_overlap = true;
-  const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_1.toml", "");
-  REQUIRE(spec.settings.box_overlap);
-  check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
-}
-
-TEST_CASE("Determinism: a random pile with edge_contacts gives the same states on 1, 2 and 8 threads at every level",
-          "[determinism]") {
-  PileOptions options;
-  options.seed = 1;
-  options.edge_contacts = true;
-  const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_1.toml", "");
-  REQUIRE(spec.settings.edge_contacts);
-  check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
+  for (const bool edge_contacts : {false, true}) {
+    PileOptions options;
+    options.seed = 1;
+    options.box_overlap = !edge_contacts;
+    options.edge_contacts = edge_contacts;
+    const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_1.toml", "");
+    REQUIRE(spec.settings.box_overlap != edge_contacts);
+    check_thread_counts(test::compile_quietly(spec), 600, true);  // landing from about step 200
+  }
 }
 
 TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, gives the same states and contacts",
