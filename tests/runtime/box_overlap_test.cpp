@@ -74,7 +74,7 @@ TEST_CASE("Edge contacts: a letter dropped on a thin plate at level 2 rests apar
   CHECK(crossing_at_the_end(letter_on_plate(false, true)) == 0);
 }
 
-TEST_CASE("Edge contacts: faces of two triangles each, across 400 cells, are tested once per pair of triangles",
+TEST_CASE("Edge contacts: each triangle has one owner cell, and two slabs of 2-triangle faces over 400 cells rest apart",
           "[box_overlap]") {
   // Two 20 x 1.5 x 20 cm slabs of 1 cm cells, the upper one resting on the lower: each face
   // of a box mesh is 2 triangles, which cross every cell under them. Tested by the cells they

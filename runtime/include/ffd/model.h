@@ -187,9 +187,9 @@ struct Model {
   std::vector<Index> cell_edge_begin;
   std::vector<std::array<Index, 2>> cell_edges;
   // (C + 1) per cell, the triangles it owns (those whose first corner is bound to it, or the
-  // next corner with a box: each triangle has one owner) and their edges (each once per cell). Levels 0-3 with edge
-  // contacts test the edges of one cell's owned triangles against another's owned triangles,
-  // each pair of triangles once: a large triangle crosses many cells (a box's face of 2
+  // next corner with a box: each triangle has one owner) and their edges (each once per
+  // cell). Levels 0-3 with edge contacts test the edges of one cell's owned triangles against
+  // another's owned triangles, each pair of triangles once: a large triangle crosses many cells (a box's face of 2
   // triangles, 400 cells of a 20 x 20 cm slab), and by the cells it crosses it was tested
   // 160,000 times a step.
   std::vector<Index> cell_owned_triangle_begin, cell_owned_triangles;

@@ -100,8 +100,9 @@ struct Scratch {
   // Per axis, the world AABB of each box's nodes (from the box update; the broad phase grows
   // it by its margins), m.
   std::array<std::vector<double>, 3> box_lo, box_hi;
-  // Levels 0-3 with edge contacts: per box, the bounds of its cell's triangles, swapped in for
-  // box_lo and box_hi while the edge tests' pairs are found (collision.cpp).
+  // Levels 0-3 with edge contacts: per box, the bounds of the triangles its cell owns
+  // (Model::cell_owned_triangles), swapped in for box_lo and box_hi while the edge tests'
+  // pairs are found (collision.cpp, pair_cells_by_triangles).
   std::array<std::vector<double>, 3> surface_lo, surface_hi;
   // Sleeping only (else empty): how far (m) each box reaches beyond its nodes in the broad
   // phase, so that an object moving wakes a sleeper before it touches it (sleep.h).
