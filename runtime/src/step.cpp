@@ -239,6 +239,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   std::array<Stage, kStageCount> order{};
   std::size_t stage_count = 0;
   const bool planes_first = exact_edges && !solver;
+  scratch.planes_hold = planes_first && !level.exact && level.boxes != &model.sub_boxes;  // levels 0-3
   for (Stage stage : model.pipeline) {
     if (planes_first && stage == Stage::Planes) continue;
     if (planes_first && stage == Stage::NarrowPhase &&

@@ -95,8 +95,8 @@ struct Scratch {
   // lattice nodes and makes the boxes of the neighbouring cells stale).
   std::vector<std::array<Vec3, 9>> box_nodes;
   std::vector<std::uint8_t> box_valid;
-  std::vector<std::uint8_t> box_moved;
-  double narrow_retested_share = 0.0;   // of the last narrow phase's pairs, those tested again  // a response moved the box's nodes since the narrow phase's detection
+  std::vector<std::uint8_t> box_moved;  // a response moved the box's nodes since the narrow phase's detection
+  double narrow_retested_share = 0.0;   // of the last narrow phase's pairs, those tested again
   // Per axis, the world AABB of each box's nodes (from the box update; the broad phase grows
   // it by its margins), m.
   std::array<std::vector<double>, 3> box_lo, box_hi;
@@ -164,6 +164,9 @@ struct Scratch {
   // dynamics and responses; which side of a triangle an edge came from (collision.cpp,
   // test_edges).
   std::vector<Vec3> x_start;
+  // Levels 0-3 with edge contacts, where the planes answer first: a cell resting on a plane
+  // takes none of a push into it (collision.cpp, plane_holds), set by step() each step.
+  bool planes_hold = false;
   // Level 4 under the paper's response: the pairs of cells of two objects among the candidate
   // pairs of sub-boxes, (lower << 32 | higher), sorted so that each pair is answered once.
   std::vector<std::uint64_t> cell_pair_keys;  // capacity: that of pairs
