@@ -46,6 +46,18 @@ State start(const Model& model) {
   return state;
 }
 
+// The state after `steps` steps from start(), each finite.
+State run(const Model& model, int steps) {
+  State state = start(model);
+  Scratch scratch = make_scratch(model);
+  StepReport report;
+  for (int i = 1; i <= steps; ++i) {
+    step(model, state, scratch, report);
+    REQUIRE(report.finite);
+  }
+  return state;
+}
+
 // The most intersecting triangle pairs over the last 0.5 s of 2 s, counted every 0.1 s.
 std::size_t crossing_at_the_end(const Model& model) {
   State state = start(model);
@@ -117,13 +129,7 @@ mass_spring = { stiffness = 5000.0, damping = 0.5, iterations = 4 }
 )";
   std::vector<std::string> log;
   const Model model = compile_scene(parse_scene(toml, "plate_under_letter.toml", ""), "plate_under_letter.toml", log);
-  State state = start(model);
-  Scratch scratch = make_scratch(model);
-  StepReport report;
-  for (int i = 1; i <= 2500; ++i) {
-    step(model, state, scratch, report);
-    REQUIRE(report.finite);
-  }
+  const State state = run(model, 2500);
   const ObjectModel& plate = model.objects[0];
   double kinetic = 0.0, mass = 0.0;  // 2 x J, kg
   for (Index n = plate.node_begin; n < plate.node_end; ++n) {
@@ -157,13 +163,7 @@ TEST_CASE("Edge contacts: each triangle has one owner cell, and two slabs of 2-t
   }
   CHECK(owned == model.surface_triangles.size());  // each triangle once
   CHECK(owners <= 16);                              // 24 triangles, their first corners at the 8 corners of each box
-  State state = start(model);
-  Scratch scratch = make_scratch(model);
-  StepReport report;
-  for (int i = 1; i <= 300; ++i) {
-    step(model, state, scratch, report);
-    REQUIRE(report.finite);
-  }
+  const State state = run(model, 300);
   // The upper slab rests on the lower one, no surface through the other.
   CHECK(SurfaceIntersections(model).count(state).total() == 0);
   CHECK(centre_of_mass(model, state.x, 1).y() > 0.015 + 0.0075 - 0.001);  // on the lower slab, not in it
