@@ -85,13 +85,14 @@ namespace {
 
 // Whether a static plane holds `cell` against a push along `push` (unit): a node of the cell
 // lies within a twentieth of a cell of the plane, and the push heads into it (more than 17
-// degrees off parallel). Where the planes answer before the objects (step.cpp), a cell pushed into
-// the floor stays there until the next step's planes put it back, into what pushed it: a
-// letter on a thin plate on the floor crossed the plate's top by 0.04 mm every step, the
-// plate buzzing at 6 cm/s (a random pile, seed 12, level 2 with edge contacts). Held, the
-// cell takes none of the push and the other side all of it, as a stack's lower bodies are
-// treated as fixed for the ones above (Guendelman, Bridson and Fedkiw 2003, shock
-// propagation).
+// degrees off parallel). Where the planes answer before the objects (step.cpp), a cell
+// pushed into the floor stays there until the next step's planes put it back, into what
+// pushed it: a letter on a thin plate on the floor crossed the plate's top by 0.04 mm every
+// step, the plate buzzing at 6 cm/s (a random pile, seed 12, level 2 with edge contacts).
+// Held, the cell takes none of the push and the other side all of it, as a stack's lower
+// bodies are treated as fixed for the ones above (Guendelman, Bridson and Fedkiw 2003, shock
+// propagation). A tenth or a fifth of a cell did worse on the random piles (README, Random
+// piles).
 bool plane_holds(const Model& model, const State& state, Index cell, const Vec3& push) {
   const double reach = 0.05 * model.objects[model.cell_object[cell]].cell_size;
   for (const PlaneModel& plane : model.planes) {
