@@ -46,6 +46,18 @@ State start(const Model& model) {
   return state;
 }
 
+// A box of size `lower` lying on the floor and one of size `upper` with its centre at
+// height `upper_y`, 1 cm cells, inelastic contacts, no option on.
+SceneSpec box_on_box(const Vec3& lower, const Vec3& upper, double upper_y) {
+  SceneSpec spec;
+  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision;
+  spec.settings.alpha = 1.0;
+  spec.planes.push_back(test::floor_plane());
+  spec.objects.push_back(test::box_object("lower", lower, 0.01, Vec3(0.0, 0.5 * lower.y(), 0.0)));
+  spec.objects.push_back(test::box_object("upper", upper, 0.01, Vec3(0.0, upper_y, 0.0)));
+  return spec;
+}
+
 // The state after `steps` steps from start(), each finite.
 State run(const Model& model, int steps) {
   State state = start(model);
@@ -147,13 +159,8 @@ TEST_CASE("Edge contacts: each triangle has one owner cell, and two slabs of 2-t
   // of a box mesh is 2 triangles, which cross every cell under them. Tested by the cells they
   // cross, each pair of triangles was tested by some 160,000 pairs of cells a step; by the
   // cells that own them, by a few.
-  SceneSpec spec;
-  spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision;
-  spec.settings.alpha = 1.0;
+  SceneSpec spec = box_on_box(Vec3(0.2, 0.015, 0.2), Vec3(0.2, 0.015, 0.2), 0.0226);
   spec.settings.edge_contacts = true;
-  spec.planes.push_back(test::floor_plane());
-  spec.objects.push_back(test::box_object("lower", Vec3(0.2, 0.015, 0.2), 0.01, Vec3(0.0, 0.0075, 0.0)));
-  spec.objects.push_back(test::box_object("upper", Vec3(0.2, 0.015, 0.2), 0.01, Vec3(0.0, 0.0226, 0.0)));
   const Model model = test::compile_quietly(spec);
   std::size_t owned = 0, owners = 0;
   for (Index c = 0; c < model.cell_count(); ++c) {
@@ -175,13 +182,8 @@ TEST_CASE("Box overlap: a flat box resting on another keeps the skin between the
   // are their boxes' faces. Without the skin the upper one rests in them (each step's sinking
   // answered back to the face), and the surfaces touch or cross.
   auto rest = [](bool box_overlap, double& gap, std::size_t& crossing) {
-    SceneSpec spec;
-    spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision;
-    spec.settings.alpha = 1.0;
+    SceneSpec spec = box_on_box(Vec3(0.06, 0.01, 0.06), Vec3(0.04, 0.01, 0.04), 0.0155);
     spec.settings.box_overlap = box_overlap;
-    spec.planes.push_back(test::floor_plane());
-    spec.objects.push_back(test::box_object("slab", Vec3(0.06, 0.01, 0.06), 0.01, Vec3(0.0, 0.005, 0.0)));
-    spec.objects.push_back(test::box_object("box", Vec3(0.04, 0.01, 0.04), 0.01, Vec3(0.0, 0.0155, 0.0)));
     const Model model = test::compile_quietly(spec);
     State state = initial_state(model);
     Scratch scratch = make_scratch(model);
