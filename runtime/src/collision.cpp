@@ -1083,7 +1083,12 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
   // (a response moves nodes, and with them the boxes around). A pair whose boxes no response
   // has moved since the detection is as the detection found it: without a hit there, it has
   // none now either, and is passed over. So the result is Algorithm 1's in this order.
-  std::fill(scratch.box_moved.begin(), scratch.box_moved.begin() + boxes.size(), std::uint8_t{0});
+  // A box left stale before the detection counts as moved: the detection read it as it was
+  // (where the planes answer first, they move cells and leave their neighbours' boxes to be
+  // updated when next needed), and its pairs are tested again. Taken as found, a pair the
+  // detection missed that way was passed over on two threads and answered on one (a random
+  // pile with box_overlap and edge contacts, switched from level 5 to level 0).
+  for (Index b = 0; b < static_cast<Index>(boxes.size()); ++b) scratch.box_moved[b] = scratch.box_valid[b] ? 0 : 1;
   Index retested = 0;
   if (!answer_in_waves<kFriction>(model, level, state, scratch, counters, max_depth, retested)) {
     PairSink sink{counters, max_depth, retested, scratch};
