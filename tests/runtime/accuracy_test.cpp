@@ -26,6 +26,9 @@ SceneSpec sphere_on_box() {
   SceneSpec spec;
   spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision | Effect::Friction;
   spec.objects.push_back(box_object("box", Vec3(0.2, 0.1, 0.2), 0.04, Vec3(0.0, 0.051, 0.0)));
+  // Faces of 32 triangles, half a cell across: with the edge contacts of levels 0-3 a face
+  // of 2 triangles moves only with its corners' cells, and the ball rolled to the box's edge.
+  spec.objects.back().subdivisions = 2;
   spec.objects.push_back(sphere_object("ball", 0.06, 0.03, Vec3(0.0, 0.24, 0.0)));
   spec.planes.push_back(floor_plane());
   return spec;

@@ -136,6 +136,7 @@ TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, giv
   // first step: many objects, so the narrow phase answers its pairs in waves over the threads.
   SceneSpec spec;
   spec.settings.effects = Effect::Gravity | Effect::Planes | Effect::InterCollision | Effect::Friction;
+  spec.settings.edge_contacts = false;  // the boxes' waves alone: the edge tests run after them on one thread
   spec.planes.push_back(test::floor_plane());
   for (int i = 0; i < 48; ++i) {
     const Vec3 at(0.039 * (i % 4), 0.0205 + 0.039 * (i / 16), 0.039 * ((i / 4) % 4));

@@ -37,11 +37,12 @@ TEST_CASE("a random pile is the same for the same seed and differs between seeds
   options.box_overlap = true;
   CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.box_overlap);
   options.box_overlap = false;
-  // So is edge_contacts.
+  // edge_contacts is on by default: written only when off, and read back.
   CHECK(first.find("edge_contacts") == std::string::npos);
-  options.edge_contacts = true;
-  CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.edge_contacts);
+  CHECK(ffd::parse_scene(first, "pile_7.toml", "").settings.edge_contacts);
   options.edge_contacts = false;
+  CHECK_FALSE(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.edge_contacts);
+  options.edge_contacts = true;
   options.objects = 0;
   CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
   options.objects = 6;

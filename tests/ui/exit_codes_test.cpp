@@ -96,8 +96,8 @@ TEST_CASE("Exit codes: piles", "[cli]") {
   check_exit("piles --levels 9", 1, "--levels: Value 9 not in range");
   check_exit("piles --responses exact", 1, "--responses");
   check_exit("piles --seeds 1 --levels 2 --update-readme missing_readme.md", 2, "missing_readme.md");
-  // --require-clean's failing path: one second of pile 1 at level 2 ends with its letters
-  // crossed and still falling, so the check fails and the pile is listed with its reasons.
+  // --require-clean's failing path: one second of pile 1 at level 2 ends with its objects
+  // still falling, so the check fails and the pile is listed with its reasons.
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_piles");
   check_exit("piles -q --seeds 1 --levels 2 --responses paper --steps 1000 --require-clean --out " + dir.string(), 4,
              "check failed: 1 of 1 runs not clean");

@@ -24,11 +24,11 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
   return true;
 }
 
-// A row's response as the table names it: "paper", "paper + box_overlap", "paper +
-// edge_contacts", "solver".
+// A row's response as the table names it, by what differs from the defaults: "paper",
+// "paper + box_overlap", "paper without edge_contacts", "solver" (which has no edge contacts).
 std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts) {
   return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "") +
-         (edge_contacts ? " + edge_contacts" : "");
+         (response == ffd::ContactResponse::Paper && !edge_contacts ? " without edge_contacts" : "");
 }
 
 }  // namespace

@@ -127,7 +127,7 @@ struct PilesOptions {
   std::string out_dir = "out/piles";
   std::string scenes_dir;            // also write each pile's scene file here
   bool box_overlap = false;          // every pile with [simulation] box_overlap = true
-  bool edge_contacts = false;        // every pile with [simulation] edge_contacts = true
+  bool edge_contacts = true;         // every pile with [simulation] edge_contacts = true (the default)
   std::string readme;                // Markdown file whose piles section is replaced
   bool require_clean = false;        // exit 4 unless every pile ends clean
   int threads = 0;

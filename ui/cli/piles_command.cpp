@@ -37,9 +37,9 @@ void register_piles(CLI::App& app, PilesOptions& o) {
   cmd->add_option("--update-readme", o.readme, "Also replace the <!-- piles:table:begin --> section of this file");
   cmd->add_flag("--box-overlap", o.box_overlap,
                 "Every pile with [simulation] box_overlap = true (boxes of two objects kept apart as wholes)");
-  cmd->add_flag("--edge-contacts", o.edge_contacts,
-                "Every pile with [simulation] edge_contacts = true (levels 0-3: crossed surface edges sent back, as at "
-                "levels 4 and 5)");
+  cmd->add_flag("--edge-contacts,!--no-edge-contacts", o.edge_contacts,
+                "Every pile with [simulation] edge_contacts = true, the default (levels 0-3: crossed surface edges sent "
+                "back, as at levels 4 and 5), or false");
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");

@@ -159,7 +159,9 @@ struct SimulationSettings {
   // Levels 0-3 under the paper's response: after the node tests, the exact surfaces' edges
   // are tested against the other object's triangles and a crossed edge is sent back the way
   // it came, as at levels 4 and 5 (README, "Random piles"), with the planes answered first.
-  bool edge_contacts = false;
+  // false is the paper's method as published (surfaces may stay crossed): its scenes of
+  // several objects keep it.
+  bool edge_contacts = true;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
   // sleep_radius of one point for sleep_time falls asleep (runtime/src/sleep.h).

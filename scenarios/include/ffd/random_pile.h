@@ -18,7 +18,7 @@ struct PileOptions {
   // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
   std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
   bool box_overlap = false;    // written as [simulation] box_overlap = true
-  bool edge_contacts = false;  // written as [simulation] edge_contacts = true
+  bool edge_contacts = true;   // the default; off: written as [simulation] edge_contacts = false
 };
 
 // The scene: `objects` objects of random shape, size and orientation in a column above a
