@@ -503,9 +503,10 @@ TEST_CASE("Replay scripts: an intersection assertion counts crossing surfaces, a
   // its side faces cross the lower box's top face.
   std::ifstream in(kScene);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::size_t section = text.find("[simulation]\n");
+  const std::string header = "[simulation]\n";
+  const std::size_t section = text.find(header);
   REQUIRE(section != std::string::npos);
-  text.insert(section + 13, "edge_contacts = false\n");
+  text.insert(section + header.size(), "edge_contacts = false\n");
   const std::string scene = temporary_path("crossing_boxes.toml");
   std::ofstream(scene) << text;
   auto run = [&](const std::string& asserts) {
