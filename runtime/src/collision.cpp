@@ -87,12 +87,10 @@ namespace {
 // lies within a twentieth of a cell of the plane, and the push heads into it (more than 17
 // degrees off parallel). Where the planes answer before the objects (step.cpp), a cell
 // pushed into the floor stays there until the next step's planes put it back, into what
-// pushed it: a letter on a thin plate on the floor crossed the plate's top by 0.04 mm every
-// step, the plate buzzing at 6 cm/s (a random pile, seed 12, level 2 with edge contacts).
-// Held, the cell takes none of the push and the other side all of it, as a stack's lower
-// bodies are treated as fixed for the ones above (Guendelman, Bridson and Fedkiw 2003, shock
-// propagation). A tenth or a fifth of a cell did worse on the random piles (README, Random
-// piles).
+// pushed it, and a thin plate under a letter buzzed. Held, the cell takes none of the push
+// and the other side all of it, as a stack's lower bodies are treated as fixed for the ones
+// above (Guendelman, Bridson and Fedkiw 2003, shock propagation). A tenth or a fifth of a
+// cell did worse on the random piles (docs/notes/2026-11-28-code-findings.md#plane-hold).
 bool plane_holds(const Model& model, const State& state, Index cell, const Vec3& push) {
   const double reach = 0.05 * model.objects[model.cell_object[cell]].cell_size;
   for (const PlaneModel& plane : model.planes) {
@@ -324,8 +322,8 @@ void cell_triangle_bounds(const Model& model, const State& state, Scratch& scrat
 // Within one object: vertex v lies within the contact radius of triangle `tri` in the rest
 // shape. Such a pair is one piece of surface, not two that met: a vertex beside a coplanar
 // triangle, or across a wall thinner than the radius, reads as a little behind it as the
-// lattice bends, and pushing those cells apart fed a resting letter 0.1-0.6 m/s of jitter
-// (a random pile, seed 15).
+// lattice bends, and pushing those cells apart made a resting letter jitter
+// (docs/notes/2026-11-28-code-findings.md#rest-shape-filter).
 bool near_at_rest(const Model& model, Index v, const std::array<Index, 3>& tri) {
   const std::vector<Vec3>& rest = model.surface_vertex_rest;
   const Vec3& p = rest[v];
@@ -349,9 +347,8 @@ bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
 // Where the closest point of the surface is a corner or an edge of triangle `tri` (`feature`),
 // p is behind the surface only if it is behind every triangle that shares that corner or edge:
 // the inside of a convex corner is where the insides of all its faces meet. Behind one face's
-// plane alone, a vertex 2.4 mm beside a letter's acute corner (walls 86 degrees apart) and in
-// front of the other wall read as inside, and was pushed into the floor every step (a random
-// pile, seed 4: a ring kept jittering at up to 0.23 m/s).
+// plane alone, a vertex beside a letter's acute corner and in front of the other wall read as
+// inside, and was pushed into the floor every step (docs/notes/2026-11-28-code-findings.md#corner-judgement).
 bool behind_every_face_at(const Model& model, const State& state, Scratch& scratch, const Vec3& p, const Vec3& closest,
                           Index tri, Feature feature) {
   const std::array<Index, 3>& corners = model.surface_triangles[tri];
@@ -481,8 +478,7 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   const Index vertex_begin = model.cell_vertex_begin[cell_b], vertex_end = model.cell_vertex_begin[cell_b + 1];
   if (vertex_begin == vertex_end || cell_inverted(model, state, cell_a)) return;
   // Between objects a vertex goes out to the skin (Model::surface_skin). Not within one,
-  // where it gained nothing measured: with it there too (before edge pushes were bounded),
-  // 13 of 20 random piles ended clean against 14 without.
+  // where it gained nothing on the random piles (docs/notes/2026-11-28-code-findings.md#self-skin).
   const double radius = model.surface_contact_radius, skin = self ? 0.0 : model.surface_skin;
   // The triangles' AABB widened by the radius: vertices outside it miss them all.
   Vec3 reach_lo, reach_hi;
@@ -575,7 +571,7 @@ void test_vertices(const Model& model, State& state, Scratch& scratch, Index cel
   scratch.record_contact(deepest_point, deepest_normal, deepest, self ? ContactKind::Self : ContactKind::Inter);
   // No rebound here: the normal is one triangle's, and on a detailed surface that says little
   // about the direction the cells met in; reversing their approach along it crushes the
-  // cells around (the hard bunnies: 100 cells inside out within 20 steps, then thousands).
+  // cells around (docs/notes/2026-11-28-code-findings.md#exact-rebound).
   respond_pair<kFriction>(model, state, cell_a, cell_b, deepest_normal, deepest, scratch.planes_hold, false);
   invalidate_surface_around(model, scratch, cell_a);
   invalidate_surface_around(model, scratch, cell_b);
@@ -602,9 +598,8 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const
 // each other (the sign of orient(p, q, r, s) changed); the edge goes back along their common
 // perpendicular to the side it was on. By at most `reach` (the depth level 5 sees a vertex
 // at), as crossed_way_out: a long edge that turned through a face in one step reads deep at
-// its far end (up to 13 mm as a letter hit a torus in a random pile, seed 13); unbounded,
-// that pile blew up (91,260 crossing pairs at the end), bounded it did not. What is left
-// goes next step.
+// its far end, many times a vertex's depth; unbounded, a pile blew up, bounded it did not
+// (docs/notes/2026-11-28-code-findings.md#bounded-edges). What is left goes next step.
 // False if neither can be told.
 bool edge_way_back(const Vec3 (&now)[5], const Vec3 (&start)[5], double reach, Vec3& normal, double& depth) {
   const Vec3 &p = now[0], &q = now[1];
@@ -657,12 +652,11 @@ bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& d
 // and the start says from which side (edge_way_back); one that crossed already goes out of
 // the face it crosses (crossed_way_out). The deepest crossing moves the cells that carry the
 // edge's end and the triangle's corner nearest to it apart, once per pair half, as a vertex
-// contact moves its cells. Within one object edges are not tested: in thin parts (a plate
-// 3 mm thick in 1 cm cells) the pushes between a surface's own cells fed energy in (a random
-// pile's plate folded through itself, 16.5 J after 3 s against 0.04 J without them). Nor under
-// the response "solver", whose springs and contacts are solved after this narrow phase and
-// move what it answered: there the edge contacts left the teapots crossed at level 5 (29-47
-// triangle pairs in every sample, none without) and the hard bunnies more so (591 against 34).
+// contact moves its cells. Within one object edges are not tested: in parts thinner than a
+// cell the pushes between a surface's own cells fed energy in. Nor under the response
+// "solver", whose springs and contacts are solved after this narrow phase and move what it
+// answered: there the edge contacts left more surfaces crossed than without them
+// (docs/notes/2026-11-28-code-findings.md#edges-within-one-object-and-under-the-solver).
 template <bool kFriction>
 void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b, Index cell_a,
                 const CellSurface& surface, StageCounters& counters, double& max_depth) {
@@ -773,8 +767,8 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
   // Past the face by the skin, as a vertex is put. A crossing made during this step is a
   // fresh contact and also rebounds (response.h; nothing at alpha = 1): moved out without
   // it, the edge kept (1 - alpha) of its approach and crossed again the next step, and at
-  // level 4 the pushes fed energy in (alpha_beta_zero at level 4: 0.17 J gained, a node at
-  // 5.1 m/s). One crossed already does not: its normal says little about how it got in.
+  // level 4 the pushes fed energy in (docs/notes/2026-11-28-code-findings.md#edge-rebound). One crossed already
+  // does not: its normal says little about how it got in.
   respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest + model.surface_skin,
                           scratch.planes_hold, deepest_fresh);
   invalidate_surface_around(model, scratch, carrier_a);
@@ -786,14 +780,13 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
 // pairs, answered by now, are not needed again this step). A triangle spans cells, its
 // corners moved by the cells they are bound to, and across a bent lattice it leaves the
 // boxes: paired by boxes, an edge passed through another surface unseen, and found crossed
-// steps later it was pushed out on the far side (a 20 m/s bullet through a 1 cm plate, the
-// fast_impact hard case). A cell that owns no triangle keeps its box's bounds.
+// steps later it was pushed out on the far side (the fast_impact hard case: a bullet through
+// its plate). A cell that owns no triangle keeps its box's bounds.
 void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch,
                              StageCounters& counters) {
   // Every cell's surface vertices, then every box's bounds, in chunks over the pool: a chunk
   // writes only its own cells' vertices and its own boxes' bounds, and the values are the ones
   // the lazy cache would give, so the state is the same bit for bit whatever the thread count.
-  // (On one thread they were a sixth of the step of two teapots with edge contacts.)
   constexpr Index kPerChunk = 64;
   const auto cells = static_cast<Index>(model.cell_count());
   parallel_for(scratch.pool, (cells + kPerChunk - 1) / kPerChunk, [&](std::uint32_t chunk, std::uint32_t) {
@@ -833,7 +826,7 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
 // of cells once: at level 4 the cells of sub-boxes paired, at levels 0-3 with edge contacts
 // the cells whose triangles' bounds meet (pair_cells_by_triangles). The boxes stop most of
 // a thin part's way in, but two crossed like an X hold no node of each other, and a crossing
-// once made stayed (level 4: 4 of 20 random piles clean; level 2: 2 of 20); the exact edges
+// once made stayed (docs/results/piles.md: the rows without edge contacts); the exact edges
 // send a crossed edge back the way it came.
 template <bool kFriction>
 void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,

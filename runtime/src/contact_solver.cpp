@@ -33,9 +33,8 @@ namespace {
 constexpr double kLodgedDepth = 0.0002;
 
 // A relative spin whose speed at the radius of gyration is below this (m/s) is the lattice's
-// node noise, not rolling: rolling resistance leaves it alone. Two boxes at rest on each other
-// keep about 0.09 mm/s RMS of node speed; resisting that noise as if it were rolling stirred
-// them to 0.13 mm/s.
+// node noise, not rolling: rolling resistance leaves it alone. Bodies at rest keep a little
+// node noise, and resisting it as if it were rolling stirred them more (docs/notes/2026-11-28-code-findings.md#spin-noise).
 constexpr double kSpinNoise = 1.0e-4;
 
 // A contact's friction below this share of its Coulomb limit held: the contact stuck (the
@@ -44,11 +43,9 @@ constexpr double kStuck = 0.999;
 
 // Passes over the resting contacts' friction alone after each sweep's contact pass. One
 // pass leaves Gauss-Seidel's friction far from converged where many contacts share nodes:
-// in the 104-letter deep stack at rest, 75 % of the contacts that pushed were at the Coulomb
-// limit and slid, and the letters crept 4.6 mm (median) from 3 s to 10 s; with 7 more
-// passes, 0.14-0.92 mm over four drops (README, Known limits). The normal corrections are
-// left alone: repeating them too (8 full passes) threw the fast_impact bullet through its
-// plate and made the lifted teapot's nodes spike to 0.85 m/s.
+// in a deep stack at rest most contacts that push sit at the Coulomb limit and slide, and
+// the letters creep. The normal corrections are left alone: repeating them too threw a fast
+// bullet through its plate and made a lifted teapot's nodes spike (docs/notes/2026-11-28-code-findings.md#friction-passes).
 constexpr int kFrictionPasses = 7;
 
 // Whether a contact's friction held inside the Coulomb cone in the solve: it stuck.
@@ -91,8 +88,8 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
 
 // The proxy's inverse mass as the contacts see it: its coupling is integrated by backward
 // Euler (interaction.cpp), so within a step it answers a push like a mass m + dt c + dt^2 k.
-// With the bare mass, a stiff coupling (10^7 N/m on 0.05 kg) held the proxy back at a box
-// pinned on the floor while the device went on: 2 x 10^5 N, then it tore through at 30 m/s.
+// With the bare mass, a very stiff coupling held the proxy back at a box pinned on the floor
+// while the device went on, until it tore through at speed (docs/notes/2026-11-28-code-findings.md#probe-mass).
 double probe_inv_mass(const Model& model, const State& state) {
   const double dt = model.settings.dt;
   return 1.0 / (model.settings.probe.mass + dt * model.settings.probe.coupling_damping +
@@ -303,8 +300,8 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
   const Bodies bodies{model, state, scratch};
   // Within kSpeculativeDistance above the plane, a node gets a contact too, as in a box: held
   // at the plane should the solve move it in. Without it a node resting on a plane was pushed
-  // out in one step and pulled back through by its springs in the next: a node of a letter
-  // resting on the bin's wall swung 1.15 mm every step, 1.1 m/s, for ever.
+  // out in one step and pulled back through by its springs in the next, and swung so for
+  // ever (docs/notes/2026-11-28-code-findings.md#speculative-plane-contacts).
   const double margin = kSpeculativeDistance;
   ContactSide ground;
   ground.node.fill(kNoIndex);
@@ -612,12 +609,11 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
     if (a.inv_mass > 0.0 && b.inv_mass > 0.0) v_ref = (a.v / a.inv_mass + b.v / b.inv_mass) / (1.0 / a.inv_mass + 1.0 / b.inv_mass);
     // A contact whose friction held inside the Coulomb cone in the solve sticks: static
     // friction, its tangential motion stopped (kept at 1 - beta, the sticking nodes under a
-    // box at rest swung sideways by 0.5 um every other step, 0.12 mm/s RMS). One that slid
-    // keeps its tangential motion: the solve's kinetic friction, mu lambda, is its friction.
-    // Taking 1 - beta of it as well was a drag in proportion to the speed, not to the load:
-    // a letter pressed against the bin's walls by 0.1 N, half its weight, hung there 1 m up
-    // from 1.0 s to 2.75 s, sliding down at 2 cm/s. A lodged node's contact has no friction in the
-    // solve and keeps 1 - beta here, eq. 8.
+    // box at rest swung sideways every other step). One that slid keeps its tangential
+    // motion: the solve's kinetic friction, mu lambda, is its friction. Taking 1 - beta of it
+    // as well was a drag in proportion to the speed, not to the load: a letter lightly pressed
+    // against a wall hung there (docs/notes/2026-11-28-code-findings.md#sliding-contacts). A lodged node's
+    // contact has no friction in the solve and keeps 1 - beta here, eq. 8.
     const bool stuck = sticks(c, beta);
     const double tangential_loss = stuck ? 1.0 : c.lodged ? beta : 0.0;
     set_side_velocity(model, state, c.a, a, v_ref, c.normal, tangential_loss);
@@ -662,8 +658,7 @@ void measure_motion(const Model& model, const State& state, Index object, Scratc
 
 // `change` cut so that `motion + change` is no larger than `motion`: the supports' own motion
 // is measured from their nodes, deformation and all, and following it would make a resting
-// object creep (0.2 mm/s after the upper teapot's support spin of 0.002 rad/s, until it
-// slipped off its rest).
+// object creep until it slipped off its rest.
 Vec3 never_faster(const Vec3& motion, const Vec3& change) {
   const double along = change.dot(motion), size_sq = change.squaredNorm();
   if (!(size_sq > 0.0)) return change;
@@ -682,13 +677,12 @@ Vec3 never_faster(const Vec3& motion, const Vec3& change) {
 //   centre, so that the velocities the contacts left there stay (about its own centre the
 //   contact points slid and the upper teapot slid off the knob). It stands for the grip of
 //   the contact patch, so a frictionless contact (beta = 0) has none: a frictionless ball
-//   resting 1 cm off centre on a box, its spin slowed about the contacts or about its own
-//   centre, pushed itself 2.5 cm and the box 3.6 cm sideways in 1 s;
+//   resting off centre on a box, its spin slowed, pushed itself and the box sideways;
 // - support damping: the object's velocity along its resting contacts' mean normal relative
 //   to its supports', taken away at alpha's share, by at most the contacts' normal force:
 //   alpha is the contact's damping, for a resting object as for an impact (the upper teapot
-//   bobbed on the lower one at 2.5 Hz for seconds; damping its deformation did nothing, the
-//   motion is its centre's).
+//   bobbed on the lower one for seconds; damping its deformation did nothing, the motion is
+//   its centre's).
 // Neither ever makes the object move or spin faster than it does. Everything is measured
 // before anything changes, so the objects' order does not matter.
 void damp_on_supports(const Model& model, State& state, Scratch& scratch, double beta) {
@@ -809,8 +803,7 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.
   // Without this pass the last contacts of a pass (the probe's) pushed a box's nodes through
-  // the floor: the probe driven at 10^7 N/m put the box's centre 0.9 cm below the floor
-  // (`probe_force`), its deepest contact at 0.65 m.
+  // the floor (the `probe_force` hard case).
   project_contacts(bodies, scratch, beta, ContactPass::Planes);
   keep_anchors(model, state, scratch, beta);
   finish_dynamics(model, state, scratch);

@@ -1,5 +1,5 @@
 #pragma once
-// The response "solver" (README, "Two contact responses"): the contacts the paper's detection
+// The response "solver" (docs/step.md, "Two contact responses"): the contacts the paper's detection
 // finds are answered as constraints inside the lattice's XPBD solve, not at once as eq. 7-9
 // answer them. A step under it:
 //   Dynamics      every awake object's prediction x* = x + dt v (begin_solver_step)

@@ -82,8 +82,7 @@ Vec3 cell_centre(const Model& model, const State& state, Index cell) {
 
 // Each cell's rotation for the step's sweeps, fitted to the predicted positions: the sweeps
 // move the nodes little beside the prediction, and fitting once a step instead of once a
-// projection took the element from about 5 times the springs' cost to 1.6 times (the soft
-// bunnies, perf).
+// projection costs a fraction of the time (docs/notes/2026-11-28-code-findings.md#corotated-cells).
 void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
   for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) {
     const std::array<Index, 8>& node = model.cell_nodes[cell];

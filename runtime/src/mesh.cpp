@@ -207,8 +207,8 @@ SurfaceMesh clean_mesh(const SurfaceMesh& input, const MeshCleanOptions& options
 
   // 3. Triangles on the same vertex set. Opposite windings cancel pairwise (a zero-thickness
   // sheet has no inside); of the surplus winding the earliest copy stays, the rest are
-  // duplicates. Cancelling only pairs keeps a closed surface closed: on the Happy Buddha,
-  // dropping every triangle of a mixed-winding set instead opens 632 boundary edges.
+  // duplicates. Cancelling only pairs keeps a closed surface closed: dropping every triangle
+  // of a mixed-winding set instead opened hundreds of boundary edges on the Happy Buddha.
   {
     std::vector<std::pair<Triangle, std::size_t>> by_set;
     by_set.reserve(triangles.size());

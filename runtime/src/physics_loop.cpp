@@ -359,11 +359,11 @@ void PhysicsLoop::Impl::run() {
       // The workers sleep until the next release too (no system call wakes them).
       pool.end_step(now > release ? 0 : release - options.spin_ns);
       if (now > release) {
-        // Overrun: skip the ticks already gone and wait for the next one (see README, "The
-        // physics loop"): no burst of back-to-back steps, the tick phase a device samples at
-        // is kept, and the thread still sleeps a part of every period, so a SCHED_FIFO loop
-        // that cannot keep up neither starves the other threads nor trips the kernel's
-        // real-time throttling (which stalls it for 50 ms each second).
+        // Overrun: skip the ticks already gone and wait for the next one (docs/realtime.md,
+        // "Pacing"): no burst of back-to-back steps, the tick phase a device samples at is
+        // kept, and the thread still sleeps a part of every period, so a SCHED_FIFO loop that
+        // cannot keep up neither starves the other threads nor trips the kernel's real-time
+        // throttling (sched_rt_runtime_us: by default 50 ms of every second stopped).
         overruns.fetch_add(1, std::memory_order_relaxed);
         release += ((now - release) / options.period_ns + 1) * options.period_ns;
       }

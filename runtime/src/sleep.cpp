@@ -37,7 +37,7 @@ std::uint32_t update_sleep(const Model& model, State& state) {
     const Vec3 centre = centre_of_mass(model, state.x, o);
     if (!((centre - state.rest_anchor[o]).norm() <= model.settings.sleep_radius)) {
       // Fast enough to wake others: it left the anchor within half of sleep_time, faster than
-      // 2 sleep_radius / sleep_time (13 mm/s by default). Slower drift in a trembling pile
+      // 2 sleep_radius / sleep_time (about 13 mm/s at the defaults). Slower drift in a trembling pile
       // would otherwise wake the neighbours, and theirs, and keep a pile from ever sleeping.
       state.moving[o] = state.still_steps[o] < sleep_steps / 2;
       state.rest_anchor[o] = centre;

@@ -2,12 +2,12 @@
 // The "sleeping" effect, after Box2D and Jolt: an object whose centre of mass has stayed
 // within sleep_radius for sleep_time is frozen. Without it a resting pile trembles for ever:
 // eq. 9 moves whole cells, the springs answer the bend that leaves, and the next step's
-// contacts push back (README, "Known limits"). Asleep, an object costs no dynamics, holds
+// contacts push back (docs/limits.md). Asleep, an object costs no dynamics, holds
 // still exactly where it settled, and collides as a static body.
 //
 // Objects sleep one by one, not in islands of touching objects as in Box2D: in a deep pile
-// the trembling never stops everywhere at once (104 letters as one island: never within 6 s), but the
-// letters at the bottom settle first and, asleep, stop passing it on to those above. An
+// the trembling never stops everywhere at once (a deep stack of letters as one island never
+// slept), but the letters at the bottom settle first and, asleep, stop passing it on to those above. An
 // object wakes when an object moving faster than 2 sleep_radius / sleep_time brings its boxes
 // within 2 sleep_radius of the sleeper's, when the probe or the grab touches it, or when a
 // command changes its physics. Slower motion meets a sleeper as a static body.

@@ -232,16 +232,16 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   if (scratch.pool) scratch.pool->begin_step();
   // Where the exact edges answer (levels 4 and 5, and 0-3 with edge_contacts; the paper's
   // response) the planes answer before the surfaces, so that the last word of a step is the
-  // contacts between objects: answered after them, a floor lifting a resting torus pushed it
-  // back into the ring on top, which the narrow phase had just parted from it, and the two
-  // stayed crossed edge through edge for 1.6 s (level 5, a random pile, seed 4). What the
+  // contacts between objects: answered after them, a floor lifting a resting object pushed
+  // it back into the one on top, which the narrow phase had just parted from it, and the two
+  // stayed crossed edge through edge (docs/notes/2026-11-28-code-findings.md#planes-first). What the
   // objects' pushes leave below a plane, it answers next step.
   std::array<Stage, kStageCount> order{};
   std::size_t stage_count = 0;
   const bool planes_first = exact_edges && !solver;
   // Answered first, the planes would otherwise take back next step what the objects' pushes
   // put into them (collision.cpp, plane_holds). Levels 0-3 only: levels 4 and 5 rest clean
-  // without it, and with it two piles failed and one blew up (README, Random piles).
+  // without it, and did worse with it (docs/notes/2026-11-28-code-findings.md#plane-hold).
   scratch.planes_hold = planes_first && !level.exact && level.boxes != &model.sub_boxes;
   for (Stage stage : model.pipeline) {
     if (planes_first && stage == Stage::Planes) continue;
@@ -280,7 +280,7 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
           find_box_contacts(model, level, state, scratch, counters, depth);
         } else if (level.exact) {
           // The exact level answers its vertex contacts at once under either response (its
-          // points lie on triangles of other cells: README, Known limits).
+          // points lie on triangles of other cells: docs/limits.md).
           if (friction) collide_surfaces<true>(model, state, scratch, counters, depth);
           else collide_surfaces<false>(model, state, scratch, counters, depth);
         } else {

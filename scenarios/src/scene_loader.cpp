@@ -1,4 +1,4 @@
-// TOML scene files -> SceneSpec. The format is documented in README.md, "Scene format".
+// TOML scene files -> SceneSpec. The format is documented in docs/scene-format.md, "Scene format".
 // The loader is strict: unknown keys, wrong types, wrong lengths and out-of-range values
 // are all errors, each naming FILE:LINE:COL and the dotted field, so a typo in a scene
 // never silently falls back to a default.
@@ -126,7 +126,7 @@ class SceneReader {
     settings.seed = static_cast<std::uint64_t>(sim.integer("seed", static_cast<std::int64_t>(settings.seed),
                                                            0, std::numeric_limits<std::int64_t>::max()));
     // The paper's single hash table of T buckets is gone: the broad phase sizes its grids to
-    // the objects (README, "How a step works"), so a table size would change nothing.
+    // the objects (docs/step.md, "How a step works"), so a table size would change nothing.
     if (sim.has("hash_table_size"))
       sim.fail_at("hash_table_size", "hash_table_size is no longer used: the broad phase sizes its grids to the objects "
                                      "(remove the key; hash_cell_size still sets the grid cell edge)");

@@ -179,7 +179,7 @@ TEST_CASE("Response solver: after a reset the same commands give the same states
 
 TEST_CASE("Response solver: a box resting on another comes to rest and stays", "[contact_solver]") {
   // The probe-and-grab boxes, left alone: the upper one lands on the lower by 0.4 s. Under the
-  // paper's response the pair keeps trembling at 13-15 mm/s RMS (README, Known limits).
+  // paper's response the pair keeps trembling at 13-15 mm/s RMS (docs/limits.md).
   const Model model = probe_and_grab_scene(ContactResponse::Solver);
   State state = initial_state(model);
   Scratch scratch = make_scratch(model);

@@ -1,4 +1,4 @@
-// Every command against the README's table of exit codes: 0 success, 1 usage (the command
+// Every command against the table of exit codes (docs/command-line.md): 0 success, 1 usage (the command
 // line), 2 input (a file given), 3 runtime (the run failed), 4 a check failed.
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -83,7 +83,7 @@ TEST_CASE("Exit codes: replay", "[cli]") {
 TEST_CASE("Exit codes: bench and accuracy", "[cli]") {
   check_exit("bench --only nope", 1, "--only: unknown scenario 'nope'");
   check_exit("bench --repetitions 0", 1, "--repetitions");
-  check_exit("bench --only happy_buddha --update-readme missing_readme.md", 2, "missing_readme.md");
+  check_exit("bench --only happy_buddha --update-docs missing_folder/bench.md", 2, "missing_folder/bench.md: cannot write");
   check_exit("accuracy --levels 9", 1, "--levels: Value 9 not in range");
   check_exit("accuracy missing.toml", 2, "missing.toml: cannot open scene file");
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_accuracy");
@@ -95,13 +95,33 @@ TEST_CASE("Exit codes: piles", "[cli]") {
   check_exit("piles --steps 5", 1, "--steps: Value 5 not in range");
   check_exit("piles --levels 9", 1, "--levels: Value 9 not in range");
   check_exit("piles --responses exact", 1, "--responses");
-  check_exit("piles --seeds 1 --levels 2 --update-readme missing_readme.md", 2, "missing_readme.md");
+  check_exit("piles --seeds 1 --levels 2 --update-docs missing_folder/piles.md", 2, "missing_folder/piles.md: cannot write");
   // --require-clean's failing path: one second of pile 1 at level 2 ends with its objects
   // still falling, so the check fails and the pile is listed with its reasons.
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_piles");
   check_exit("piles -q --seeds 1 --levels 2 --responses paper --steps 1000 --require-clean --out " + dir.string(), 4,
              "check failed: 1 of 1 runs not clean");
   CHECK_THAT(test::read_text(dir / "piles.md"), Catch::Contains("- pile 1, paper level 2: not at rest at the end;"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Exit codes: hard-cases", "[cli]") {
+  check_exit("hard-cases --responses exact", 1, "--responses");
+  check_exit("hard-cases missing.toml", 2, "missing.toml");
+  check_exit("hard-cases --update-docs missing_folder/hard_cases.md", 2, "missing_folder/hard_cases.md: cannot write");
+  const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_hard_cases");
+  std::filesystem::create_directories(dir);
+  const std::string hard = std::string(FFDSIM_SCENARIO_DIR) + "/replays/hard/";
+  // A case that passes, one row per response, into a results page.
+  check_exit("hard-cases -q --responses paper solver --update-docs " + (dir / "hard.md").string() + " " + hard +
+                 "alpha_zero_head_on.toml",
+             0, "| `alpha_zero_head_on` | solver | pass |");
+  CHECK_THAT(test::read_text(dir / "hard.md"), Catch::Contains("2 of 2 runs passed."));
+  // A case whose assertion fails: exit 4, the row names the first failure.
+  const std::string failing = (dir / "fails.toml").string();
+  std::ofstream(failing) << "version = 1\nscene = \"" << kData << "probe_and_grab.toml\"\nduration_ms = 200\n"
+                         << "[assert.stability]\nspeed_max_m_s = 1e-9\n";
+  check_exit("hard-cases -q " + failing + " --responses paper", 4, "| `fails` | paper | **FAIL** |");
   std::filesystem::remove_all(dir);
 }
 

@@ -1,5 +1,5 @@
 // Exports from run and replay: deformed surfaces as OBJ and PLY, and the per-step time series
-// as CSV and JSON (README.md, "Exports").
+// as CSV and JSON (docs/command-line.md, "Exports").
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>

@@ -9,7 +9,7 @@ namespace ffd::ui {
 
 enum class Key : int {
   None,
-  // Shortcuts (README, "The interactive viewer").
+  // Shortcuts (docs/realtime.md, "The interactive viewer").
   Space, P, R, S, F, H, L, B, C, Escape,
   // Text editing in ImGui fields.
   Tab, Left, Right, Up, Down, PageUp, PageDown, Home, End, Insert, Delete, Backspace, Enter, A, V, X, Y, Z,

@@ -65,7 +65,7 @@ InputState ScriptedInput::next(const Viewer& viewer, std::uint64_t newest_step, 
       PixelRect r;
       if (!viewer.widget_rect(e.mouse_to_widget, r))
         throw InputError(e.where + ".widget: no widget " + in_quotes(e.mouse_to_widget) +
-                         " is shown (README, \"UI input scripts\", lists them)");
+                         " is shown (docs/realtime.md, \"UI input scripts\", lists them)");
       x = r.x0 + e.widget_fraction * (r.x1 - r.x0);
       y = 0.5f * (r.y0 + r.y1);
     }

@@ -75,7 +75,7 @@ class Session {
   const LatencyHistory& history() const { return history_; }
   LoopCounters counters() const { return loop_->counters(); }
   // Every command applied since step 0 and the state hash every 100 steps: a replay script
-  // of the session so far (README, "Replay scripts").
+  // of the session so far (docs/replays.md, "Replay scripts").
   const Recording& log() const { return log_; }
   // Every step's compute and wake-up lateness so far, ns (for the end-of-run report).
   const std::vector<std::int64_t>& compute_ns() const { return compute_ns_; }

@@ -564,7 +564,7 @@ void Viewer::tuning_panel() {
     ImGui::EndCombo();
   }
   remember("accuracy");
-  // The contact response (README, "Two contact responses"): a recorded state command.
+  // The contact response (docs/step.md, "Two contact responses"): a recorded state command.
   const ContactResponse response = frame ? frame->response : session_->initial().params.response;
   if (ImGui::BeginCombo("response", response_name(response))) {
     for (ContactResponse r : {ContactResponse::Paper, ContactResponse::Solver})

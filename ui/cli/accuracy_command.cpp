@@ -27,7 +27,9 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
       ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Folder for accuracy.md, accuracy.json, accuracy.gp and accuracy.png")
       ->capture_default_str();
-  cmd->add_option("--update-readme", o.readme, "Also replace the <!-- accuracy:table:begin --> section of this file");
+  cmd->add_option("--update-docs", o.results_page,
+                  "Also write the table as a results page stamped with this command, the commit, the machine and the "
+                  "date, and the plot beside it as a PNG of the same name (docs/results/accuracy.md)");
   cmd->add_option("--plot", o.plot, "Also copy the plot to this PNG file");
   add_threads_option(*cmd, o.threads);
   cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
@@ -35,7 +37,7 @@ void register_accuracy(CLI::App& app, AccuracyOptions& o) {
 
 int run_accuracy_command(const AccuracyOptions& o) {
   try {
-    if (!o.readme.empty()) check_sections(o.readme, {"accuracy:table"});  // before minutes of running
+    if (!o.results_page.empty()) check_results_page(o.results_page);  // before minutes of running
     std::vector<std::string> scenes = o.scenes;
     if (scenes.empty())
       scenes = {ffd::scenario_dir() + "/scenes/two_teapots.toml",
@@ -86,9 +88,14 @@ int run_accuracy_command(const AccuracyOptions& o) {
       throw std::runtime_error("gnuplot failed to draw " + png.string() + " (is gnuplot installed? setup.sh installs it)");
     if (!o.plot.empty()) std::filesystem::copy_file(png, o.plot, std::filesystem::copy_options::overwrite_existing);
     std::printf("%s", table.c_str());
-    if (!o.readme.empty()) {
-      update_sections(o.readme, {{"accuracy:table", table}});
-      std::fprintf(stderr, "ffdsim accuracy: updated %s\n", o.readme.c_str());
+    if (!o.results_page.empty()) {
+      std::filesystem::path page_plot(o.results_page);
+      page_plot.replace_extension(".png");
+      std::filesystem::copy_file(png, page_plot, std::filesystem::copy_options::overwrite_existing);
+      write_results_page(o.results_page, "What accuracy costs", ffdbench::cpu_description(),
+                         "![Gap and penetration against collision time per step](" + page_plot.filename().string() +
+                             ")\n\n" + table);
+      std::fprintf(stderr, "ffdsim accuracy: wrote %s and %s\n", o.results_page.c_str(), page_plot.string().c_str());
     }
     std::fprintf(stderr, "ffdsim accuracy: wrote %s/accuracy.md, accuracy.json and accuracy.png\n", o.out_dir.c_str());
     return finite ? kExitOk : kExitRuntime;

@@ -10,7 +10,7 @@
 
 namespace ffdsim {
 
-// Exit codes shared by the subcommands (the README's table; tests/ui/exit_codes_test.cpp holds
+// Exit codes shared by the subcommands (docs/command-line.md, "Exit codes"; tests/ui/exit_codes_test.cpp holds
 // every command to it).
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitUsage = 1;            // the command line: unknown command or option, a value out of range
@@ -29,7 +29,7 @@ int thread_count(int option);
 void add_threads_option(CLI::App& command, int& threads);
 
 // --surfaces-every K --surfaces DIR --surface-format obj|ply --series FILE (run, replay;
-// simulate has the surfaces): README.md, "Exports".
+// simulate has the surfaces): docs/command-line.md, "Exports".
 struct ExportArguments {
   long long surfaces_every = 0;
   std::string surfaces_dir, surface_format = "obj", series_path;
@@ -93,7 +93,7 @@ struct BenchOptions {
   bool quick = false;
   std::string out_dir = "out/bench";
   std::vector<std::string> only;  // scenario keys; empty = all
-  std::string readme;             // Markdown file whose bench sections are replaced
+  std::string results_page;       // --update-docs: the results page to write (docs/results/bench.md)
   int repetitions = 20;
   int threads = 0;                // the second thread count of every row (the first is 1)
   std::vector<std::string> responses = {"paper", "solver"};  // contact responses, a row each (spec.h)
@@ -108,7 +108,7 @@ struct AccuracyOptions {
   std::vector<int> levels;          // empty: all
   std::vector<std::string> responses = {"paper", "solver"};  // contact responses (spec.h)
   std::string out_dir = "out/accuracy";
-  std::string readme;               // Markdown file whose accuracy section is replaced
+  std::string results_page;         // --update-docs: the results page (its plot beside it, same name .png)
   std::string plot;                 // where the PNG is also copied
   int threads = 0;
   bool quiet = false;
@@ -128,13 +128,23 @@ struct PilesOptions {
   std::string scenes_dir;            // also write each pile's scene file here
   bool box_overlap = false;          // every pile with [simulation] box_overlap = true
   bool edge_contacts = true;         // every pile with [simulation] edge_contacts = true (the default)
-  std::string readme;                // Markdown file whose piles section is replaced
+  std::string results_page;          // --update-docs: the results page to write
   bool require_clean = false;        // exit 4 unless every pile ends clean
   int threads = 0;
   bool quiet = false;
 };
 void register_piles(CLI::App& app, PilesOptions& options);
 int run_piles_command(const PilesOptions& options);
+
+struct HardCasesOptions {
+  std::vector<std::string> scripts;  // replay scripts or folders; empty: scenarios/replays/hard
+  std::vector<std::string> responses = {"paper", "solver"};
+  std::string results_page;          // --update-docs: the results page to write
+  int threads = 0;
+  bool quiet = false;
+};
+void register_hard_cases(CLI::App& app, HardCasesOptions& options);
+int run_hard_cases_command(const HardCasesOptions& options);
 
 struct DeviceSimOptions {
   std::string script;          // a replay script: its [[probe_path]] is the device's motion

@@ -71,7 +71,7 @@ std::vector<ffd::Vec3> trajectory(const ffd::ReplayScript& script, double step_m
 void register_device_sim(CLI::App& app, DeviceSimOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "device-sim", "A haptic device without a device: plays a replay script's probe path over the device link at 1 kHz "
-                    "and writes the force it receives (README, \"Haptic devices\")");
+                    "and writes the force it receives (docs/realtime.md, \"Haptic devices\")");
   cmd->add_option("script", o.script, "Replay script whose [[probe_path]] the device plays")->required();
   cmd->add_option("--to", o.url, "Where ffdsim run --device listens: udp://HOST:PORT")->required();
   cmd->add_option("--out", o.out_path, "CSV: each millisecond's sample and the newest force received");

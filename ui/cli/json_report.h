@@ -1,5 +1,5 @@
 #pragma once
-// The JSON run report of `ffdsim simulate` (format in README.md, "Run report").
+// The JSON run report of `ffdsim simulate` (format in docs/command-line.md, "Run report").
 #include <nlohmann/json.hpp>
 #include <string>
 

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "ffd/toml_reader.h"
 #include "ffd/worker_pool.h"
+#include "output_files.h"
 
 namespace ffdsim {
 int thread_count(int option) { return option > 0 ? option : ffd::default_thread_count(); }
@@ -88,6 +89,8 @@ int main(int argc, char** argv) {
   ffdsim::register_accuracy(app, accuracy);
   ffdsim::PilesOptions piles;
   ffdsim::register_piles(app, piles);
+  ffdsim::HardCasesOptions hard_cases;
+  ffdsim::register_hard_cases(app, hard_cases);
   ffdsim::DeviceSimOptions device_sim;
   ffdsim::register_device_sim(app, device_sim);
   // A first word that is no option must name a command: say which word, not only that a
@@ -106,6 +109,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "ffdsim: error: unknown command '%s' (commands: %s)\n", argv[1], command_list(app).c_str());
     return ffdsim::kExitUsage;
   }
+  ffdsim::set_command_line(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -119,5 +123,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("device-sim")) return ffdsim::run_device_sim(device_sim);
   if (app.got_subcommand("accuracy")) return ffdsim::run_accuracy_command(accuracy);
   if (app.got_subcommand("piles")) return ffdsim::run_piles_command(piles);
+  if (app.got_subcommand("hard-cases")) return ffdsim::run_hard_cases_command(hard_cases);
   return ffdsim::kExitUsage;
 }

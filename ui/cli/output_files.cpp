@@ -98,24 +98,74 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
-                            const std::string& body) {
-  const std::string begin = "<!-- " + name + ":begin -->", end = "<!-- " + name + ":end -->";
-  const std::size_t b = text.find(begin), e = text.find(end);
-  if (b == std::string::npos || e == std::string::npos || e < b)
-    throw std::runtime_error(file + ": no section " + begin + " ... " + end + " to replace");
-  return text.substr(0, b + begin.size()) + "\n" + body + text.substr(e);
+namespace {
+std::string recorded_command_line = "ffdsim";
+
+// The first line a shell command prints, or "" when it fails (no git, not a checkout).
+std::string first_line_of(const std::string& command) {
+  std::FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return "";
+  std::string text;
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, pipe)) text += buffer;
+  if (pclose(pipe) != 0) return "";
+  return text.substr(0, text.find('\n'));
 }
 
-void check_sections(const std::string& file, const std::vector<std::string>& names) {
-  std::string text = read_file(file);
-  for (const std::string& name : names) text = replace_section(text, file, name, "");
+std::string shell_quoted(const std::string& word) {
+  std::string quoted = "'";
+  for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
 }
 
-void update_sections(const std::string& file, const Sections& sections) {
-  std::string text = read_file(file);
-  for (const auto& [name, body] : sections) text = replace_section(text, file, name, body);
-  write_file(file, text);
+// The commit the results page's checkout is at, "+ changes" when tracked files other than
+// the results pages themselves differ from it (a page made from uncommitted code says so).
+std::string commit_of(const std::filesystem::path& folder) {
+  const std::string git = "git -C " + shell_quoted(folder.string());
+  const std::string commit = first_line_of(git + " rev-parse --short=12 HEAD 2>/dev/null");
+  if (commit.empty()) return "unknown (not a git checkout)";
+  const std::string prefix = first_line_of(git + " rev-parse --show-prefix 2>/dev/null");
+  const std::string changes = first_line_of(git + " status --porcelain --untracked-files=no -- ':/' ':(exclude,top)" +
+                                            prefix + "*.md' ':(exclude,top)" + prefix + "*.png' 2>/dev/null | head -1");
+  return changes.empty() ? commit : commit + " with uncommitted changes";
+}
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  recorded_command_line = "ffdsim";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    const bool plain = word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=:,") ==
+                       std::string::npos;
+    recorded_command_line += " " + (plain && !word.empty() ? word : shell_quoted(word));
+  }
+}
+
+void check_results_page(const std::string& file) {
+  const std::filesystem::path path(file);
+  const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : ".";
+  if (!std::filesystem::is_directory(folder)) throw std::runtime_error(file + ": cannot write: no folder " + folder.string());
+  std::filesystem::path probe = path;
+  probe += ".partial";
+  std::ofstream out(probe);
+  const bool writable = static_cast<bool>(out);
+  out.close();
+  std::error_code ignored;
+  std::filesystem::remove(probe, ignored);
+  if (!writable) throw std::runtime_error(file + ": cannot write");
+}
+
+std::string results_stamp(const std::string& folder, const std::string& cpu) {
+  return "- Command: `" + recorded_command_line + "`\n- Commit: " + commit_of(folder.empty() ? "." : folder) +
+         "\n- Machine: " + cpu + "\n- Date: " + today() + "\n";
+}
+
+void write_results_page(const std::string& file, const std::string& title, const std::string& cpu,
+                        const std::string& body) {
+  const std::filesystem::path path(file);
+  const std::string stamp = results_stamp(path.has_parent_path() ? path.parent_path().string() : ".", cpu);
+  write_file(path, "# " + title + "\n\n<!-- Written by ffdsim; run the command below again to update it. -->\n\n" + stamp +
+                       "\n" + body);
 }
 
 std::string duration_text(double seconds) {

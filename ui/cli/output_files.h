@@ -1,6 +1,6 @@
 #pragma once
-// What the report-writing commands (bench, accuracy) share: progress on the terminal, files
-// written whole, and generated sections of a Markdown file replaced in place.
+// What the report-writing commands (bench, accuracy, piles, hard-cases) share: progress on the
+// terminal, files written whole, and results pages stamped with how they were made.
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -35,17 +35,17 @@ class ProgressBar {
 void write_file(const std::filesystem::path& path, const std::string& text);
 std::string read_file(const std::string& path);                               // throws naming the file
 
-// Replaces the text between "<!-- NAME:begin -->" and "<!-- NAME:end -->"; throws naming
-// `file` when the markers are missing.
-std::string replace_section(const std::string& text, const std::string& file, const std::string& name,
-                            const std::string& body);
-
-// `--update-readme`: check_sections() before a long run (a wrong path or a missing marker fails
-// at once), update_sections() after it, on the file as it is then, so that edits made to it
-// while the run went on are kept. Each pair: a section's name and its new body.
-using Sections = std::vector<std::pair<std::string, std::string>>;
-void check_sections(const std::string& file, const std::vector<std::string>& names);
-void update_sections(const std::string& file, const Sections& sections);
+// `--update-docs FILE`: a results page (docs/results/*.md), the table as the tool printed it
+// under a stamp that says how it was made: the command line, the commit (and whether the
+// checkout had changes beside the results pages), the machine and the date. The docs cite the
+// page; nobody types its figures in.
+void set_command_line(int argc, char** argv);  // main() records it for the stamp
+// Before a long run: the page's folder exists and a file can be written there (fails at once,
+// naming the file, rather than after minutes of measuring).
+void check_results_page(const std::string& file);
+void write_results_page(const std::string& file, const std::string& title, const std::string& cpu,
+                        const std::string& body);
+std::string results_stamp(const std::string& folder, const std::string& cpu);  // the stamp alone
 
 std::string today();                              // YYYY-MM-DD, UTC
 std::string duration_text(double seconds);        // "4.2 s", "12 s", "3 min 05 s", "1 h 02 min"

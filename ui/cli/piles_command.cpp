@@ -34,7 +34,9 @@ void register_piles(CLI::App& app, PilesOptions& o) {
       ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Folder for piles.md and piles.json")->capture_default_str();
   cmd->add_option("--scenes", o.scenes_dir, "Also write each pile's scene file (pile_SEED.toml) into this folder");
-  cmd->add_option("--update-readme", o.readme, "Also replace the <!-- piles:table:begin --> section of this file");
+  cmd->add_option("--update-docs", o.results_page,
+                  "Also write the table and the piles not clean as a results page stamped with this command, the "
+                  "commit, the machine and the date (docs/results/piles.md)");
   cmd->add_flag("--box-overlap", o.box_overlap,
                 "Every pile with [simulation] box_overlap = true (boxes of two objects kept apart as wholes)");
   cmd->add_flag("--edge-contacts,!--no-edge-contacts", o.edge_contacts,
@@ -49,7 +51,7 @@ void register_piles(CLI::App& app, PilesOptions& o) {
 
 int run_piles_command(const PilesOptions& o) {
   try {
-    if (!o.readme.empty()) check_sections(o.readme, {"piles:table"});  // before minutes of running
+    if (!o.results_page.empty()) check_results_page(o.results_page);  // before minutes of running
     std::vector<std::uint64_t> seeds = o.seeds;
     if (seeds.empty())
       for (std::uint64_t s = 1; s <= (o.long_set ? 20u : 3u); ++s) seeds.push_back(s);
@@ -106,9 +108,10 @@ int run_piles_command(const PilesOptions& o) {
                        .dump(2) +
                    "\n");
     std::printf("%s%s", table.c_str(), unclean.empty() ? "" : ("\n" + unclean).c_str());
-    if (!o.readme.empty()) {
-      update_sections(o.readme, {{"piles:table", table}});
-      std::fprintf(stderr, "ffdsim piles: updated %s\n", o.readme.c_str());
+    if (!o.results_page.empty()) {
+      write_results_page(o.results_page, "Random piles", ffdbench::cpu_description(),
+                         table + (unclean.empty() ? "" : "\n" + unclean));
+      std::fprintf(stderr, "ffdsim piles: wrote %s\n", o.results_page.c_str());
     }
     std::fprintf(stderr, "ffdsim piles: wrote %s/piles.md and piles.json\n", o.out_dir.c_str());
     if (!finite) return kExitRuntime;

@@ -282,7 +282,7 @@ void register_run(CLI::App& app, RunOptions& o) {
       ->check(CLI::Range(0.001, 1e6));
   cmd->add_option("--frames", o.frames_dir, "Headless: write what the window would show as PNGs (and frames.json) here");
   cmd->add_option("--fps", o.fps, "PNG frames per simulated second")->check(CLI::Range(0.1, 1000.0));
-  cmd->add_option("--input", o.input_script, "UI input script: mouse and keys drive the viewer (README, \"UI input scripts\")");
+  cmd->add_option("--input", o.input_script, "UI input script: mouse and keys drive the viewer (docs/realtime.md, \"UI input scripts\")");
   cmd->add_option("--width", o.width, "Framebuffer width, px")->check(CLI::Range(64, 8192));
   cmd->add_option("--height", o.height, "Framebuffer height, px")->check(CLI::Range(64, 8192));
   cmd->add_option("--record", o.record_path, "Record the command stream and state hashes to this replay file");
@@ -298,7 +298,7 @@ void register_run(CLI::App& app, RunOptions& o) {
   add_export_options(*cmd, o.exports);
   add_threads_option(*cmd, o.threads);
   cmd->add_option("--device", o.device_url,
-                  "A haptic device bridge drives the probe over UDP at this address, udp://127.0.0.1:PORT (README, "
+                  "A haptic device bridge drives the probe over UDP at this address, udp://127.0.0.1:PORT (docs/realtime.md, "
                   "\"Haptic devices\")");
   cmd->add_flag("--device-allow-remote", o.device_allow_remote,
                 "Let --device bind an address other than loopback (the probe is then reachable from the network)");

@@ -1,5 +1,5 @@
 #pragma once
-// A haptic device on the probe (README, "Haptic devices"): a device bridge sends the device's
+// A haptic device on the probe (docs/realtime.md, "Haptic devices"): a device bridge sends the device's
 // pose every millisecond over UDP (device_protocol.h) and receives the probe's coupling force.
 //
 //   bridge --UDP--> I/O thread --decode, order--> [SPSC queue] --> physics thread

@@ -1,5 +1,5 @@
 #pragma once
-// The device link's wire protocol (README, "Haptic devices"): what a device bridge and ffdsim
+// The device link's wire protocol (docs/realtime.md, "Haptic devices"): what a device bridge and ffdsim
 // exchange every millisecond over UDP. Two fixed-size messages, little-endian, version 1.
 //
 //   Sample, bridge -> ffdsim, 80 bytes          Force, ffdsim -> bridge, 80 bytes

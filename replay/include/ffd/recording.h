@@ -1,6 +1,6 @@
 #pragma once
-// Recordings: the command stream of a session, written as a replay script (README.md,
-// "Replay scripts") with the state hash every N steps as determinism assertions, so that
+// Recordings: the command stream of a session, written as a replay script (docs/replays.md,
+// "Recordings") with the state hash every N steps as determinism assertions, so that
 // `ffdsim replay FILE` reproduces the session and reports the first step it diverged at.
 #include <cstdint>
 #include <cstdio>
@@ -25,7 +25,7 @@ struct Recording {
 // that they read back as the same doubles.
 std::string recording_text(const Model& model, const Recording& recording);
 
-// A recording written while the session runs (README, "Recordings"): the header goes to disk
+// A recording written while the session runs (docs/replays.md, "Recordings"): the header goes to disk
 // when it is made, commands and state hashes follow in blocks each time flush() is called
 // (by a thread that is not the physics thread, every few milliseconds). Every block ends with
 // a blank line, so a run killed mid-write leaves a file that replays up to its last complete

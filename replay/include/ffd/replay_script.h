@@ -1,5 +1,5 @@
 #pragma once
-// Replay scripts: a scene, timed commands and assertions, in TOML (format in README.md,
+// Replay scripts: a scene, timed commands and assertions, in TOML (format in docs/replays.md,
 // "Replay scripts"). A recording written by `ffdsim run --record` is a replay script too.
 // Every error names the file, the line, the column and the field:
 //   "poke.toml:14:9: event[2].alpha: must be in [0, 1] (got 1.5)"

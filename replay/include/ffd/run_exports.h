@@ -1,5 +1,5 @@
 #pragma once
-// What a run writes for the user beside its report (README.md, "Exports"): the deformed
+// What a run writes for the user beside its report (docs/command-line.md, "Exports"): the deformed
 // surfaces every K steps, as OBJ or PLY, and a per-step time series (energy, contacts,
 // penetration, stage times) as CSV or JSON for plotting a tuning session. Fed from the
 // loop's lossless telemetry and its snapshots, on the thread that drains them: the 1 kHz

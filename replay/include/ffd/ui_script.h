@@ -1,7 +1,7 @@
 #pragma once
 // UI input scripts: mouse and key input for the interactive viewer, timed in simulated
 // milliseconds, so that a headless run (or a window under test) is driven the way a person
-// drives the window. Format in README.md, "UI input scripts".
+// drives the window. Format in docs/realtime.md, "UI input scripts".
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -15,7 +15,7 @@ struct UiInputEvent {
   // Where the cursor goes (at most one of these):
   std::optional<std::pair<float, float>> mouse;  // px from the top-left
   std::string mouse_to_object;    // the object's lattice centre on screen
-  std::string mouse_to_widget;    // a named viewer widget (README lists them)
+  std::string mouse_to_widget;    // a named viewer widget (docs/realtime.md lists them)
   float widget_fraction = 0.5f;   // across the widget, 0 = left edge, 1 = right edge
   std::pair<float, float> offset{0.0f, 0.0f};  // px added to the target; alone: a move from the cursor
   bool relative = false;          // offset alone

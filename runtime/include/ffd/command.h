@@ -1,7 +1,7 @@
 #pragma once
 // Commands: the only way anything outside the physics thread changes a running simulation.
 // Each names the step at whose start it takes effect, so a run is a pure function of the
-// scene and the command stream (see README, "The physics loop").
+// scene and the command stream (see docs/realtime.md, "The physics loop").
 #include <cstdint>
 
 #include "ffd/model.h"

@@ -127,10 +127,8 @@ inline constexpr double kBoxSkinShare = 0.01;
 // Level 4 under the paper's response: the skin its sub-boxes keep between the nodes and faces
 // of two objects' sub-boxes, as a share of the finer cell size (0.3 mm on 1 cm cells). Flat
 // faces of two objects resting on each other lie in their sub-boxes' faces, and without it
-// touched and crossed by a step's sinking (a random pile's letter lying on a plate, up to 300
-// crossing triangle pairs every few steps, seed 3). A skin of 1 % of a cell still left two
-// plates crossed there and a letter moving in another pile; 2 % and 3 % left all 20 piles of
-// the long set clean.
+// touched and crossed by a step's sinking. 3 % is the largest share tried that kept the
+// random piles clean (docs/notes/2026-11-28-code-findings.md#sub-box-skin).
 inline constexpr double kSubBoxSkinShare = 0.03;
 
 struct Model {
@@ -189,9 +187,9 @@ struct Model {
   // (C + 1) per cell, the triangles it owns (those whose first corner is bound to it, or the
   // next corner with a box: each triangle has one owner) and their edges (each once per
   // cell). Levels 0-3 with edge contacts test the edges of one cell's owned triangles against
-  // another's owned triangles, each pair of triangles once: a large triangle crosses many cells (a box's face of 2
-  // triangles, 400 cells of a 20 x 20 cm slab), and by the cells it crosses it was tested
-  // 160,000 times a step.
+  // another's owned triangles, each pair of triangles once: a large triangle crosses many
+  // cells (a box's face of 2 triangles crosses every cell of the face), and by the cells it
+  // crosses a pair of triangles was tested once per pair of those cells.
   std::vector<Index> cell_owned_triangle_begin, cell_owned_triangles;
   std::vector<Index> cell_owned_edge_begin;
   std::vector<std::array<Index, 2>> cell_owned_edges;

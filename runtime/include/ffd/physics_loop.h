@@ -11,8 +11,8 @@
 // Inside the loop nothing allocates, locks, logs or does I/O; every buffer is made by the
 // constructor. The step index is the only clock the physics sees: a run is a pure function
 // of (scene, command stream) whether the loop paces in real time or runs as fast as it can.
-// Policies (overrun re-phasing, back-pressure in fast mode) are described in README.md,
-// "The physics loop".
+// Policies (overrun re-phasing, back-pressure in fast mode) are described in
+// docs/realtime.md, "The physics loop".
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -34,7 +34,7 @@ enum class Pacing : std::uint8_t {
 };
 
 // A live source of the probe's device position polled by the physics thread every step (a
-// haptic device link, README "Haptic devices"). Both calls run on the physics thread and must
+// haptic device link, docs/realtime.md, "Haptic devices"). Both calls run on the physics thread and must
 // neither allocate, lock, block nor do I/O: they exchange data with their own threads through
 // lock-free queues. The position device_position() gives becomes a ProbePose command stamped
 // with the step, applied and recorded like any other, so a recording replays the session

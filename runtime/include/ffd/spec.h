@@ -124,7 +124,7 @@ enum class Accuracy : std::uint8_t {
 inline constexpr int kAccuracyLevels = 6;
 const char* accuracy_name(Accuracy a);
 
-// How the contacts the narrow phase finds are answered (README, "Two contact responses").
+// How the contacts the narrow phase finds are answered (docs/step.md, "Two contact responses").
 enum class ContactResponse : std::uint8_t {
   Paper = 0,   // at once, pair by pair: eq. 7-9 on the two cells' nodes (section 7, Algorithm 1)
   Solver = 1,  // as constraints, solved with the springs and volumes in the same iterations
@@ -154,11 +154,11 @@ struct SimulationSettings {
   // Levels 0-4 under the paper's response: two boxes of different objects are also kept
   // apart as wholes (the separating axes of their faces), with a skin of 1 % of the finer
   // cell size between them, where testing their nodes alone lets two thin boxes cross like
-  // an X (README, "Random piles").
+  // an X (docs/accuracy.md, "Random piles").
   bool box_overlap = false;
   // Levels 0-3 under the paper's response: after the node tests, the exact surfaces' edges
   // are tested against the other object's triangles and a crossed edge is sent back the way
-  // it came, as at levels 4 and 5 (README, "Random piles"), with the planes answered first.
+  // it came, as at levels 4 and 5 (docs/accuracy.md, "Random piles"), with the planes answered first.
   // false is the paper's method as published (surfaces may stay crossed): its scenes of
   // several objects keep it.
   bool edge_contacts = true;

@@ -84,7 +84,7 @@ struct State {
 };
 
 // FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,
-// then the probe proxy's x and v, in node order. ~20 us for 3,000 nodes.
+// then the probe proxy's x and v, in node order: one pass over the state, no allocation.
 std::uint64_t state_hash(const State& state);
 
 // A state hash as printed and as replay scripts hold it: 16 lower-case hex digits.

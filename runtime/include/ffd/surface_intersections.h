@@ -43,9 +43,9 @@ IntersectionCount find_intersections(const std::vector<SurfaceMesh>& meshes, std
 // pass through its body (156 pairs). A pair of one surface's triangles that both cross in the
 // rest shape is left out too: as the surface bends, a rest crossing moves on to the next
 // triangle (the teapots, apart at level 0, kept 5 such pairs). Meshes are the Model's
-// objects, in order; the Model must outlive this (it is read at every count). A count costs
-// about 30 ms for the teapots (12,640 triangles) and 28 s for the alphabet pile (2.3 million
-// triangles, 380,000 crossing pairs at 0.5 s; Intel Xeon).
+// objects, in order; the Model must outlive this (it is read at every count). A count grows
+// with the triangles and the crossing pairs: milliseconds for thousands of triangles, tens of
+// seconds for millions (docs/notes/2026-11-28-code-findings.md#intersection-count).
 class SurfaceIntersections {
  public:
   explicit SurfaceIntersections(const Model& model);

@@ -3,7 +3,7 @@
 // callbacks are the models). The threads are created with the pool, before the first step,
 // and never inside one. Inside a step the workers spin; between steps they sleep until the
 // next release time the physics loop announces (no system call ever wakes them: a futex wake
-// costs about 60 us on a virtual machine), or nap in short slices when none is announced.
+// costs tens of microseconds on a virtual machine), or nap in short slices when none is announced.
 //
 // Determinism: parallel_for(chunks, fn) runs fn(chunk) once for every chunk index, on
 // whichever thread claims it first. The caller cuts the work into chunks that do not depend

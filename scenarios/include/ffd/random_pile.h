@@ -1,7 +1,7 @@
 #pragma once
 // Seeded random piles: drop scenes of the hollow and thin shapes whose surfaces can pass
 // through each other edge first (rings, tori, thin plates, bowls, extruded letters), for the
-// tests and `ffdsim piles`. A pile is scene text (README.md, "Scene format"): the same seed
+// tests and `ffdsim piles`. A pile is scene text (docs/scene-format.md, "Scene format"): the same seed
 // gives the same file on every machine, and a pile that goes wrong can be written out, opened
 // in the viewer and replayed.
 #include <cstdint>

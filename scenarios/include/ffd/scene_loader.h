@@ -1,5 +1,5 @@
 #pragma once
-// TOML scene files -> SceneSpec. The format is documented in README.md ("Scene format").
+// TOML scene files -> SceneSpec. The format is documented in docs/scene-format.md ("Scene format").
 // Every error names the file, the line and the field:
 //   "scenes/bad.toml:12:1: object[2].cell_size: must be > 0 (got -0.1)"
 #include <cstddef>

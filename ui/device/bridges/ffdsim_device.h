@@ -1,4 +1,4 @@
-/* ffdsim device link, reference bridge for C and C++ (README, "Haptic devices").
+/* ffdsim device link, reference bridge for C and C++ (docs/realtime.md, "Haptic devices").
  *
  * One header, no dependencies beyond POSIX sockets. Copy it into your device's program and,
  * in the device SDK's servo callback (1 kHz), send the device's pose and apply the newest

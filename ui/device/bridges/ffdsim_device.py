@@ -2,7 +2,7 @@
 """ffdsim device link, reference bridge for Python (standard library only).
 
 Copy this file beside your device's Python bindings and, every millisecond, send the
-device's pose and apply the newest force ffdsim sent back (README, "Haptic devices"):
+device's pose and apply the newest force ffdsim sent back (docs/realtime.md, "Haptic devices"):
 
     link = Link("127.0.0.1", 47000)             # where `ffdsim run --device` listens
     link.send(x, y, z)                          # metres, in the scene's frame
