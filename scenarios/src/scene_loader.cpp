@@ -68,6 +68,23 @@ bool contains(const std::vector<std::string_view>& words, std::string_view word)
   return std::find(words.begin(), words.end(), word) != words.end();
 }
 
+}  // namespace
+
+std::vector<std::pair<std::string, std::vector<std::string>>> scene_keys() {
+  const auto strings = [](const std::vector<std::string_view>& keys) {
+    return std::vector<std::string>(keys.begin(), keys.end());
+  };
+  return {{"simulation", strings(kSimulationKeys)}, {"probe", strings(kProbeKeys)},
+          {"grab", strings(kGrabKeys)},             {"plane", strings(kPlaneKeys)},
+          {"object", strings(kObjectKeys)},         {"object.glyph", strings(kGlyphKeys)},
+          {"object.mass_spring", strings(kMassSpringKeys)},
+          {"object.shape_matching", strings(kShapeMatchingKeys)},
+          {"group", strings(kGroupOnlyKeys)},       {"group.layout", strings(kLayoutKeys)},
+          {"group.random", strings(kRandomKeys)}};
+}
+
+namespace {
+
 std::vector<std::string_view> all_effect_names() {
   std::vector<std::string_view> names;
   for (const Effect e : kAllEffects) names.emplace_back(effect_name(e));

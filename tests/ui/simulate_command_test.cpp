@@ -243,7 +243,7 @@ TEST_CASE("objects that overlap at the start are named with the depth, by simula
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("the README's own-mesh walkthrough scene runs as it says, on a 100 mm cube in millimetres", "[cli]") {
+TEST_CASE("the README's own-mesh walkthrough scene and its replay run as it says, on a 100 mm cube in millimetres", "[cli]") {
   std::ifstream readme(std::string(FFDSIM_SCENARIO_DIR) + "/../README.md");
   REQUIRE(readme);
   const std::string text((std::istreambuf_iterator<char>(readme)), std::istreambuf_iterator<char>());
@@ -264,5 +264,24 @@ TEST_CASE("the README's own-mesh walkthrough scene runs as it says, on a 100 mm 
   CHECK_THAT(r.output, Catch::Contains("lattice 15x15x15 of 0.007 m cells"));  // as step 5 says
   CHECK_THAT(r.output, Catch::Contains("finite true"));
   CHECK(r.output.find("warning") == std::string::npos);
+  // The README's replay of that scene: a live alpha / beta change and a latency assertion,
+  // checked in fast mode (the sanitizer builds' steps are far slower: latency reported there).
+  const std::size_t replay_begin = text.find("<!-- replay-walkthrough:begin -->\n```toml\n");
+  const std::size_t replay_end = text.find("```\n<!-- replay-walkthrough:end -->");
+  REQUIRE(replay_begin != std::string::npos);
+  REQUIRE(replay_end != std::string::npos);
+  const std::size_t body = replay_begin + std::string("<!-- replay-walkthrough:begin -->\n```toml\n").size();
+  std::ofstream(dir / "my_replay.toml") << text.substr(body, replay_end - body);
+#ifdef FFDSIM_SANITIZED
+  const std::string latency = " --skip-latency";
+#else
+  const std::string latency;
+#endif
+  const Result replay = run_ffdsim("replay --fast " + (dir / "my_replay.toml").string() + latency);
+  INFO(replay.output);
+  CHECK(replay.exit_code == 0);
+  CHECK_THAT(replay.output, Catch::Contains("latency.compute_p99_us"));
+  CHECK_THAT(replay.output, Catch::Contains("PASS contact.max_penetration_m"));
+  CHECK_THAT(replay.output, Catch::Contains("passed: all"));
   std::filesystem::remove_all(dir);
 }

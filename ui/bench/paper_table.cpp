@@ -258,7 +258,7 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
     << threads
     << " (the same final state, checked); speed-up = whole-step p99 on 1 thread / on " << threads
     << ". ✗: above the target. The paper's bunny row (five bunnies) stands beside both spring variants. "
-       "Response: how contacts are answered ([Two contact responses](#two-contact-responses)); collision handling "
+       "Response: how contacts are answered ([Two contact responses](../step.md#two-contact-responses) in docs/); collision handling "
        "is detection alone under `solver`, whose contacts are solved with the springs (in the whole step).\n\n";
   s << "Per element, 1 thread (mean over the measured steps; targets: a spring projection ≤ 1.5 ns, an FFD AABB "
        "update ≤ 15 ns):\n\n";

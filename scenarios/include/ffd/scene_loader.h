@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ffd/model.h"
 #include "ffd/spec.h"
@@ -57,6 +59,12 @@ SceneSpec read_scene_table(const toml::table& table, const std::string& origin, 
 // The folder with scenes/, meshes/, replays/ and ui_scripts/: <prefix>/share/ffdsim when
 // ffdsim runs installed, else the source tree's scenarios/.
 std::string scenario_dir();
+
+// Every key the loader reads, by the table it stands in: "simulation", "probe", "grab",
+// "plane", "object", "object.glyph", "object.mass_spring", "object.shape_matching", "group"
+// (its own keys; the object's keys but `position` are read too), "group.layout",
+// "group.random". The docs test holds docs/scene-format.md to this list, both ways.
+std::vector<std::pair<std::string, std::vector<std::string>>> scene_keys();
 std::string default_scene_path();
 SceneSpec default_scene();
 
