@@ -348,7 +348,8 @@ bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
 // p is behind the surface only if it is behind every triangle that shares that corner or edge:
 // the inside of a convex corner is where the insides of all its faces meet. Behind one face's
 // plane alone, a vertex beside a letter's acute corner and in front of the other wall read as
-// inside, and was pushed into the floor every step (docs/notes/2026-11-28-code-findings.md#corner-judgement).
+// inside, and was pushed into the floor every step
+// (docs/notes/2026-11-28-code-findings.md#corner-judgement).
 bool behind_every_face_at(const Model& model, const State& state, Scratch& scratch, const Vec3& p, const Vec3& closest,
                           Index tri, Feature feature) {
   const std::array<Index, 3>& corners = model.surface_triangles[tri];
@@ -767,8 +768,8 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
   // Past the face by the skin, as a vertex is put. A crossing made during this step is a
   // fresh contact and also rebounds (response.h; nothing at alpha = 1): moved out without
   // it, the edge kept (1 - alpha) of its approach and crossed again the next step, and at
-  // level 4 the pushes fed energy in (docs/notes/2026-11-28-code-findings.md#edge-rebound). One crossed already
-  // does not: its normal says little about how it got in.
+  // level 4 the pushes fed energy in (docs/notes/2026-11-28-code-findings.md#edge-rebound).
+  // One crossed already does not: its normal says little about how it got in.
   respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest + model.surface_skin,
                           scratch.planes_hold, deepest_fresh);
   invalidate_surface_around(model, scratch, carrier_a);

@@ -34,7 +34,8 @@ constexpr double kLodgedDepth = 0.0002;
 
 // A relative spin whose speed at the radius of gyration is below this (m/s) is the lattice's
 // node noise, not rolling: rolling resistance leaves it alone. Bodies at rest keep a little
-// node noise, and resisting it as if it were rolling stirred them more (docs/notes/2026-11-28-code-findings.md#spin-noise).
+// node noise, and resisting it as if it were rolling stirred them more
+// (docs/notes/2026-11-28-code-findings.md#spin-noise).
 constexpr double kSpinNoise = 1.0e-4;
 
 // A contact's friction below this share of its Coulomb limit held: the contact stuck (the
@@ -45,7 +46,8 @@ constexpr double kStuck = 0.999;
 // pass leaves Gauss-Seidel's friction far from converged where many contacts share nodes:
 // in a deep stack at rest most contacts that push sit at the Coulomb limit and slide, and
 // the letters creep. The normal corrections are left alone: repeating them too threw a fast
-// bullet through its plate and made a lifted teapot's nodes spike (docs/notes/2026-11-28-code-findings.md#friction-passes).
+// bullet through its plate and made a lifted teapot's nodes spike
+// (docs/notes/2026-11-28-code-findings.md#friction-passes).
 constexpr int kFrictionPasses = 7;
 
 // Whether a contact's friction held inside the Coulomb cone in the solve: it stuck.
@@ -89,7 +91,8 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
 // The proxy's inverse mass as the contacts see it: its coupling is integrated by backward
 // Euler (interaction.cpp), so within a step it answers a push like a mass m + dt c + dt^2 k.
 // With the bare mass, a very stiff coupling held the proxy back at a box pinned on the floor
-// while the device went on, until it tore through at speed (docs/notes/2026-11-28-code-findings.md#probe-mass).
+// while the device went on, until it tore through at speed
+// (docs/notes/2026-11-28-code-findings.md#probe-mass).
 double probe_inv_mass(const Model& model, const State& state) {
   const double dt = model.settings.dt;
   return 1.0 / (model.settings.probe.mass + dt * model.settings.probe.coupling_damping +
@@ -612,8 +615,8 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
     // box at rest swung sideways every other step). One that slid keeps its tangential
     // motion: the solve's kinetic friction, mu lambda, is its friction. Taking 1 - beta of it
     // as well was a drag in proportion to the speed, not to the load: a letter lightly pressed
-    // against a wall hung there (docs/notes/2026-11-28-code-findings.md#sliding-contacts). A lodged node's
-    // contact has no friction in the solve and keeps 1 - beta here, eq. 8.
+    // against a wall hung there (docs/notes/2026-11-28-code-findings.md#sliding-contacts).
+    // A lodged node's contact has no friction in the solve and keeps 1 - beta here, eq. 8.
     const bool stuck = sticks(c, beta);
     const double tangential_loss = stuck ? 1.0 : c.lodged ? beta : 0.0;
     set_side_velocity(model, state, c.a, a, v_ref, c.normal, tangential_loss);
@@ -622,8 +625,8 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
   if (!rebounds) return;
   // The stop and the rebound together never add kinetic energy to the nodes they answer: a
   // cell's rebound is its pair's, but cells share nodes, and a node in several pairs is pulled
-  // several ways by the stop. Two spheres meeting head on at alpha = 0 left 0.8 % faster than
-  // they came until the rebound was bounded by what the stop took.
+  // several ways by the stop: two spheres meeting head on at alpha = 0 left faster than they
+  // came until the rebound was bounded by what the stop took.
   const double allowed = std::max(0.0, energy_before - answered_energy(model, state, scratch));  // J
   const std::array<double, 2> added = rebound(model, state, scratch, 1.0);
   if (!(added[0] + added[1] > allowed)) return;

@@ -21,7 +21,8 @@ Energy compute_energy(const Model& model, const State& state) {
     // The energy of the forces the springs applied, f^2 / 2k: the same as 1/2 k (l - l0)^2
     // where the solver converges (f = k (l - l0)), and bounded by the forces where it does not:
     // a few sweeps leave very stiff springs stretched by a residue that 1/2 k (l - l0)^2 would
-    // read as energy the springs never push with (docs/notes/2026-11-28-code-findings.md#elastic-energy).
+    // read as energy the springs never push with
+    // (docs/notes/2026-11-28-code-findings.md#elastic-energy).
     // f also holds the springs' damping force, so a
     // spring changing length fast reads a little more than it stores: never less.
     const double stiffness = state.params.stiffness[i];

@@ -234,8 +234,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // response) the planes answer before the surfaces, so that the last word of a step is the
   // contacts between objects: answered after them, a floor lifting a resting object pushed
   // it back into the one on top, which the narrow phase had just parted from it, and the two
-  // stayed crossed edge through edge (docs/notes/2026-11-28-code-findings.md#planes-first). What the
-  // objects' pushes leave below a plane, it answers next step.
+  // stayed crossed edge through edge (docs/notes/2026-11-28-code-findings.md#planes-first).
+  // What the objects' pushes leave below a plane, it answers next step.
   std::array<Stage, kStageCount> order{};
   std::size_t stage_count = 0;
   const bool planes_first = exact_edges && !solver;

@@ -24,7 +24,8 @@ constexpr std::int64_t kNapNs = 100'000;
 // nap. Longer than any sequential part of a step that fits the 1 ms budget (a worker that naps
 // misses the parts that start meanwhile, and the stepping thread does them alone), shorter
 // than the sequential responses of a large pile (milliseconds), where a spinning worker
-// would hold a core the viewer's renderer needs (docs/notes/2026-11-28-code-findings.md#worker-spin).
+// would hold a core the viewer's renderer needs
+// (docs/notes/2026-11-28-code-findings.md#worker-spin).
 constexpr std::int64_t kStepSpinNs = 300'000;
 constexpr std::int64_t kStepNapNs = 100'000;
 // Inside a step a worker spins on PAUSE; after this many it also yields the core, so that

@@ -56,7 +56,8 @@ HWY_INLINE void project_lanes(D d, const SpringSolve& s, std::size_t first) {
   const V ka = hn::Mul(hn::Load(d, in[12]), dlambda);
   const V kb = hn::Mul(hn::Load(d, in[13]), dlambda);
   // Inactive lanes write back what they read. The lanes' nodes are written one by one: a
-  // hardware scatter was slower than scalar stores (docs/notes/2026-11-28-code-findings.md#spring-kernel).
+  // hardware scatter was slower than scalar stores
+  // (docs/notes/2026-11-28-code-findings.md#spring-kernel).
   HWY_ALIGN double out[6][kLanesMax];
   hn::Store(hn::IfThenElse(active, hn::Add(xa, hn::Mul(ka, gx)), xa), d, out[0]);
   hn::Store(hn::IfThenElse(active, hn::Add(ya, hn::Mul(ka, gy)), ya), d, out[1]);
