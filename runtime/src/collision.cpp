@@ -17,14 +17,17 @@ namespace ffd {
 
 BoxLevel box_level(const Model& model, Accuracy accuracy) {
   const double skin = model.box_skin;
-  const bool edges = model.settings.edge_contacts;  // levels 0-3: the scene's choice
+  // The exact edges are tested between objects: a scene without inter-collision has none, at
+  // any level (its objects, if several, do not collide with each other at all).
+  const bool between = has(model.settings.effects, Effect::InterCollision);
+  const bool edges = between && model.settings.edge_contacts;  // levels 0-3: the scene's choice
   switch (accuracy) {
     case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, edges, skin};
     case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, edges, skin};
     case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, edges, skin};
     case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, edges, skin};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, true, std::max(skin, model.sub_box_skin)};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, true, skin};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, between, std::max(skin, model.sub_box_skin)};
+    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, between, skin};
   }
   return {&model.boxes, 0, 9, false, false, edges, skin};
 }

@@ -16,8 +16,9 @@ struct BoxLevel {
   bool samples;      // also Model::box_samples, the surface nodes (level 3)
   bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
   // Levels 4 and 5 under the paper's response, and levels 0-3 with [simulation]
-  // edge_contacts: the exact surfaces' edges against the other object's triangles too
-  // (collision.cpp, test_edges), and the planes answered first (step.cpp).
+  // edge_contacts, in a scene with inter-collision: the exact surfaces' edges against the
+  // other object's triangles too (collision.cpp, test_edges), and the planes answered first
+  // (step.cpp). The one place that decides it.
   bool edges;
   // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
   // Model::box_skin ("box_overlap"; 0 when off), at level 4 the larger of it and

@@ -221,11 +221,9 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
-  // The exact edge contacts (levels 4 and 5, and 0-3 with edge_contacts; the paper's response
-  // only) read where the step started. They are between objects: without inter-collision
-  // there are none, and the stages keep their order.
-  const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper &&
-                           has(model.settings.effects, Effect::InterCollision);
+  // The exact edge contacts (BoxLevel::edges; the paper's response only) read where the step
+  // started.
+  const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
   if (exact_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
