@@ -122,6 +122,10 @@ TEST_CASE("Exit codes: hard-cases", "[cli]") {
   std::ofstream(failing) << "version = 1\nscene = \"" << kData << "probe_and_grab.toml\"\nduration_ms = 200\n"
                          << "[assert.stability]\nspeed_max_m_s = 1e-9\n";
   check_exit("hard-cases -q " + failing + " --responses paper", 4, "| `fails` | paper | **FAIL** |");
+  // A recording keeps the response it was recorded with: refused, naming the file.
+  const std::string recording = (dir / "session.toml").string();
+  check_exit("run --headless --seconds 0.2 --threads 1 --record " + recording + " " + kMinimal, 0, "");
+  check_exit("hard-cases -q " + recording, 2, "session.toml: a recording replays the response it was recorded with");
   std::filesystem::remove_all(dir);
 }
 

@@ -155,15 +155,12 @@ void check_results_page(const std::string& file) {
   if (!writable) throw std::runtime_error(file + ": cannot write");
 }
 
-std::string results_stamp(const std::string& folder, const std::string& cpu) {
-  return "- Command: `" + recorded_command_line + "`\n- Commit: " + commit_of(folder.empty() ? "." : folder) +
-         "\n- Machine: " + cpu + "\n- Date: " + today() + "\n";
-}
-
 void write_results_page(const std::string& file, const std::string& title, const std::string& cpu,
                         const std::string& body) {
   const std::filesystem::path path(file);
-  const std::string stamp = results_stamp(path.has_parent_path() ? path.parent_path().string() : ".", cpu);
+  const std::string stamp = "- Command: `" + recorded_command_line + "`\n- Commit: " +
+                            commit_of(path.has_parent_path() ? path.parent_path() : ".") + "\n- Machine: " + cpu +
+                            "\n- Date: " + today() + "\n";
   write_file(path, "# " + title + "\n\n<!-- Written by ffdsim; run the command below again to update it. -->\n\n" + stamp +
                        "\n" + body);
 }

@@ -45,7 +45,6 @@ void set_command_line(int argc, char** argv);  // main() records it for the stam
 void check_results_page(const std::string& file);
 void write_results_page(const std::string& file, const std::string& title, const std::string& cpu,
                         const std::string& body);
-std::string results_stamp(const std::string& folder, const std::string& cpu);  // the stamp alone
 
 std::string today();                              // YYYY-MM-DD, UTC
 std::string duration_text(double seconds);        // "4.2 s", "12 s", "3 min 05 s", "1 h 02 min"
