@@ -122,7 +122,7 @@ TEST_CASE("Response solver: a box dropped on the floor lands and rests on it", "
   CHECK(fastest < 0.02);   // m/s, after 1 s
 }
 
-TEST_CASE("Response: a live switch is a state command; paper stays bit for bit what it was", "[contact_solver]") {
+TEST_CASE("Response: a live switch is a state command, paper stays bit for bit what it was", "[contact_solver]") {
   const Model paper = probe_and_grab_scene(ContactResponse::Paper);
   const Model solver = probe_and_grab_scene(ContactResponse::Solver);
   State a = initial_state(paper), b = initial_state(solver);
@@ -238,7 +238,7 @@ double centre_speed_after(const Model& model, int steps) {
 
 }  // namespace
 
-TEST_CASE("Response solver: rolling resistance stops a rolling ball; without it the ball rolls on", "[contact_solver]") {
+TEST_CASE("Response solver: rolling resistance stops a rolling ball, without it the ball rolls on", "[contact_solver]") {
   const Model resisted = test::compile_quietly(rolling_ball(0.05));
   const Model free = test::compile_quietly(rolling_ball(0.0));
   // A bounded torque: about mu_r g / R_gyration ~ 0.05 x 9.81 / 0.04 ~ 12 rad/s^2 of spin

@@ -121,7 +121,7 @@ TEST_CASE("Surface intersections: two slabs crossing edge through edge, no verte
   CHECK(ffd::find_intersections({a, moved(b, {0.0, 0.0, 0.011})}).total() == 0);
 }
 
-TEST_CASE("Surface intersections: rings linked like a chain do not touch; rings through each other's tube do",
+TEST_CASE("Surface intersections: rings linked like a chain do not touch, rings through each other's tube do",
           "[intersections]") {
   const SurfaceMesh ring = torus(0.05, 0.01);
   // About the x axis a quarter turn: the second ring stands in the xz plane.

@@ -249,7 +249,7 @@ TEST_CASE("Device URLs: udp://HOST:PORT, loopback unless allowed", "[device]") {
   CHECK_THROWS_WITH(DeviceLink(remote), Catch::Contains("--device-allow-remote"));
 }
 
-TEST_CASE("Sequence order: after a silence any number starts afresh; one not far ahead counts its gaps", "[device]") {
+TEST_CASE("Sequence order: after a silence any number starts afresh, one not far ahead counts its gaps", "[device]") {
   SequenceOrder order(20'000'000);  // 20 ms
   std::uint32_t skipped = 99;
   CHECK(order.take(10, 0, skipped) == SequenceOrder::Verdict::Taken);
@@ -271,7 +271,7 @@ TEST_CASE("Sequence order: after a silence any number starts afresh; one not far
   CHECK(skipped == 1);
 }
 
-TEST_CASE("Device link: samples in order are interpolated; duplicates, late and malformed ones are counted, never applied",
+TEST_CASE("Device link: samples in order are interpolated, duplicates, late and malformed ones are counted, never applied",
           "[device]") {
   LinkSettings settings;
   settings.delay_ms = 0.0;
@@ -309,7 +309,7 @@ TEST_CASE("Device link: samples in order are interpolated; duplicates, late and 
   CHECK(link.counters().reengagements == 1);
 }
 
-TEST_CASE("Device link: the force sent is limited in size and rate; the watchdog zeroes it and holds the probe",
+TEST_CASE("Device link: the force sent is limited in size and rate, the watchdog zeroes it and holds the probe",
           "[device]") {
   LinkSettings settings;
   settings.force_limit_n = 2.0;

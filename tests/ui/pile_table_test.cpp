@@ -46,7 +46,7 @@ TEST_CASE("Pile runner: a box passing through another crosses it for as long as 
   CHECK_FALSE(run.clean());
 }
 
-TEST_CASE("Pile runner: surfaces held crossed stay crossed to the end; apart and still they are clean") {
+TEST_CASE("Pile runner: surfaces held crossed stay crossed to the end, apart and still they are clean") {
   SECTION("crossed") {
     const Model model = two_boxes(Vec3(0.01, 0.01, 0.005), Vec3::Zero());
     const SurfaceIntersections crossings(model);

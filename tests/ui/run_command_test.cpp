@@ -113,7 +113,7 @@ TEST_CASE("Viewer in a window under Xvfb: a scene outside the scene folder opens
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("Viewer: the scene reloads when its file changes on disk; a change that does not load leaves it running",
+TEST_CASE("Viewer: the scene reloads when its file changes on disk, a change that does not load leaves it running",
           "[viewer]") {
   const std::filesystem::path dir = test::fresh_temp_dir("reload");
   std::filesystem::create_directories(dir);
