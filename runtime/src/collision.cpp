@@ -7,7 +7,6 @@
 
 #include "ffd/box_test.h"
 #include "ffd/closest_point.h"
-#include "ffd/response.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
 #include "kernels/box_kernels.h"
@@ -78,12 +77,6 @@ void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scr
   ++counters.boxes_updated;
 }
 
-Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes) {
-  Vec3 v = Vec3::Zero();
-  for (Index n : nodes) v += state.v[n];
-  return v * 0.125;
-}
-
 namespace {
 
 // Whether a static plane holds `cell` against a push along `push` (unit): a node of the cell
@@ -111,39 +104,14 @@ bool plane_holds(const Model& model, const State& state, Index cell, const Vec3&
 template <bool kFriction>
 void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, const Vec3& n, double r,
                   bool planes_hold, bool may_rebound = true) {
-  const std::array<Index, 8>& nodes_a = model.cell_nodes[cell_a];
-  const std::array<Index, 8>& nodes_b = model.cell_nodes[cell_b];
-  // An object asleep is static here: infinite mass, velocity zero (sleep.h).
-  bool static_a = state.asleep[model.cell_object[cell_a]], static_b = state.asleep[model.cell_object[cell_b]];
+  bool held_a = false, held_b = false;
   if (planes_hold) {
-    const bool held_a = plane_holds(model, state, cell_a, -n), held_b = plane_holds(model, state, cell_b, n);
-    if (held_a != held_b) {
-      static_a = static_a || held_a;
-      static_b = static_b || held_b;
-    }
+    held_a = plane_holds(model, state, cell_a, -n);
+    held_b = plane_holds(model, state, cell_b, n);
+    if (held_a == held_b) held_a = held_b = false;
   }
-  const double inv_a = static_a ? 0.0 : model.cell_inv_mass[cell_a], inv_b = static_b ? 0.0 : model.cell_inv_mass[cell_b];
-  const Vec3 va = mean_velocity(state, nodes_a), vb = mean_velocity(state, nodes_b);
-  const double u = (vb - va).dot(n);
-  const PositionShares share = position_shares(inv_a, inv_b);
-  if (u < 0.0) {  // eq. 8 only while the cells approach
-    Vec3 v_ref = static_a ? va : vb;  // a static side's velocity is the reference (zero asleep)
-    if (!static_a && !static_b) {
-      const double ma = 1.0 / inv_a, mb = 1.0 / inv_b;
-      v_ref = (ma * va + mb * vb) / (ma + mb);
-    }
-    const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
-    const double bounce = may_rebound ? rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt) : 0.0;
-    const Vec3 kick_a = -share.a * bounce * n, kick_b = share.b * bounce * n;
-    if (!static_a)
-      for (Index i : nodes_a) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_a;
-    if (!static_b)
-      for (Index i : nodes_b) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) + kick_b;
-  }
-  // Eq. 9: the position correction, split the same way.
-  const Vec3 move_a = -share.a * r * n, move_b = share.b * r * n;
-  for (Index i : nodes_a) state.x[i] += move_a;
-  for (Index i : nodes_b) state.x[i] += move_b;
+  answer_at_once(model, state, ResponseSide::of_cell(cell_a, held_a), ResponseSide::of_cell(cell_b, held_b), n, r,
+                 kFriction ? state.params.beta : 0.0, may_rebound);
 }
 
 }  // namespace
@@ -200,45 +168,39 @@ struct PairSink {
   }
 };
 
-// Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop).
+// Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop), each
+// found inside answered at once.
 template <bool kFriction>
 void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index mover, Index container,
                 bool self, PairSink& sink) {
   StageCounters& counters = sink.counters;
   const BoxSet& boxes = *level.boxes;
   const int node_count = tested_node_count(level);
-  BoxPlanes planes = box_planes(scratch.box_nodes[container]);
-  if (planes.degenerate) {
-    counters.node_tests += node_count;  // tested and found nothing: a degenerate box contains no node
-    return;
-  }
   // Boxes of two objects hold each other's nodes a skin away from their faces (level 4,
   // "box_overlap").
   const double skin = self ? 0.0 : level.skin;
-  for (double& offset : planes.offset) offset += skin;
   const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
-  Vec3 relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
-  for (int k = 0; k < node_count; ++k) {
-    ++counters.node_tests;
-    const Vec3 node = tested_node(model, level, state, scratch, mover, k);
-    const NodeInBox hit = node_in_box(planes, node, relative_velocity, kRecentEntrySteps * model.settings.dt);
-    if (!hit.inside) continue;
-    if (self) ++counters.self_contacts;
-    else ++counters.inter_contacts;
-    const double box_depth = std::max(0.0, hit.depth - skin);  // within the skin: touching
-    sink.max_depth = std::max(sink.max_depth, box_depth);
-    sink.record(node, planes.normal[hit.face], box_depth, self ? ContactKind::Self : ContactKind::Inter);
-    respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth, scratch.planes_hold);
-    // Update both boxes at once so the remaining tests see the corrected state.
-    invalidate_around(model, boxes, scratch, cell_a);
-    invalidate_around(model, boxes, scratch, cell_b);
-    ensure_box(model, boxes, state, scratch, container, counters);
-    ensure_box(model, boxes, state, scratch, mover, counters);
-    planes = box_planes(scratch.box_nodes[container]);
-    if (planes.degenerate) return;
-    for (double& offset : planes.offset) offset += skin;
-    relative_velocity = mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
-  }
+  const bool tested = scan_points_in_box(
+      scratch, container, skin, kRecentEntrySteps * model.settings.dt, node_count,
+      [&](int k) { return tested_node(model, level, state, scratch, mover, k); },
+      [&] { return Vec3(mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a])); },
+      [&](int, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
+        ++counters.node_tests;
+        if (!hit.inside) return false;
+        if (self) ++counters.self_contacts;
+        else ++counters.inter_contacts;
+        const double box_depth = std::max(0.0, hit.depth - skin);  // within the skin: touching
+        sink.max_depth = std::max(sink.max_depth, box_depth);
+        sink.record(node, planes.normal[hit.face], box_depth, self ? ContactKind::Self : ContactKind::Inter);
+        respond_pair<kFriction>(model, state, cell_a, cell_b, planes.normal[hit.face], hit.depth, scratch.planes_hold);
+        // Update both boxes at once so the remaining tests see the corrected state.
+        invalidate_around(model, boxes, scratch, cell_a);
+        invalidate_around(model, boxes, scratch, cell_b);
+        ensure_box(model, boxes, state, scratch, container, counters);
+        ensure_box(model, boxes, state, scratch, mover, counters);
+        return true;
+      });
+  if (!tested) counters.node_tests += node_count;  // tested and found nothing: a degenerate box contains no node
 }
 
 // Surface vertex v (eq. 2) on the lattice nodes at `x`: the lattice now (State::x) or as the
@@ -1119,7 +1081,7 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
 template <bool kFriction>
 void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
                     double& max_depth) {
-  const double alpha = state.params.alpha, beta = kFriction ? state.params.beta : 0.0;
+  const double beta = kFriction ? state.params.beta : 0.0;
   const BoxSet& boxes = *level.boxes;
   const int node_count = tested_node_count(level);
   for (const PlaneModel& plane : model.planes) {
@@ -1164,14 +1126,8 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
       ++counters.plane_contacts;
       max_depth = std::max(max_depth, r);
       scratch.record_contact(deepest_point, plane.normal, r, ContactKind::Plane);
-      const std::array<Index, 8>& nodes = model.cell_nodes[cell];
-      const double u = mean_velocity(state, nodes).dot(plane.normal);
-      if (u < 0.0) {
-        const Vec3 kick = rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt) * plane.normal;
-        for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], Vec3::Zero(), plane.normal, alpha, beta) + kick;
-      }
-      const Vec3 move = r * plane.normal;  // the plane does not move: whole correction here
-      for (Index i : nodes) state.x[i] += move;
+      // The plane does not move: the whole correction is the cell's.
+      answer_at_once(model, state, ResponseSide::plane(), ResponseSide::of_cell(cell), plane.normal, r, beta, true);
       invalidate_around(model, boxes, scratch, cell);
       ensure_box(model, boxes, state, scratch, b, counters);
     }

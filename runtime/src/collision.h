@@ -2,8 +2,10 @@
 // Collision stages: FFD AABB update (section 4), broad phase (6.1), node-in-box
 // narrow phase with immediate response (6.2, 7, Algorithm 1) and static planes, at the
 // accuracy level the State asks for (spec.h, Accuracy).
+#include "ffd/box_test.h"
 #include "ffd/model.h"
 #include "ffd/step.h"
+#include "paper_response.h"
 
 namespace ffd {
 
@@ -31,10 +33,6 @@ BoxLevel box_level(const Model& model, Accuracy accuracy);
 void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b);
 void update_boxes(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch);
 
-// How far back (in steps) a node's way into a box is trusted to pick the contact face
-// (box_test.h, the velocity-aware node_in_box); shared by box pairs and the probe.
-inline constexpr double kRecentEntrySteps = 2.0;
-
 // Box b recomputed if a response made it stale (counted in `counters`).
 void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b,
                 StageCounters& counters);
@@ -48,6 +46,37 @@ Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, 
 int tested_node_count(const BoxLevel& level);
 const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b, int k);
 
+// Node-in-box detection (eq. 3-7, the face chosen by the way in: box_test.h), the one loop
+// every response and every mover (a box's tested nodes, the probe's) runs: points k in
+// [0, count), point_at(k), against box `container` as Scratch::box_nodes holds it, its
+// planes grown by `skin` (m), at the points' velocity relative to the box,
+// relative_velocity() (m/s). on_point(k, point, hit, planes) sees every point; it returns
+// true where it answered at once and so moved the box or the points (having made the box
+// valid again): the planes and the relative velocity are then taken again, and the scan ends
+// should the box have become degenerate. False if the box is degenerate to begin with (it
+// contains no point; nothing is called).
+template <class PointAt, class RelativeVelocity, class OnPoint>
+bool scan_points_in_box(const Scratch& scratch, Index container, double skin, double recent, int count,
+                        const PointAt& point_at, const RelativeVelocity& relative_velocity, const OnPoint& on_point) {
+  const auto planes_now = [&] {
+    BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+    if (skin != 0.0)
+      for (double& offset : planes.offset) offset += skin;
+    return planes;
+  };
+  BoxPlanes planes = planes_now();
+  if (planes.degenerate) return false;
+  Vec3 relative = relative_velocity();
+  for (int k = 0; k < count; ++k) {
+    const Vec3 point = point_at(k);
+    if (!on_point(k, point, node_in_box(planes, point, relative, recent), planes)) continue;
+    planes = planes_now();
+    if (planes.degenerate) break;
+    relative = relative_velocity();
+  }
+  return true;
+}
+
 // Whether a tested node of box `mover` lies inside box `container` grown by `margin` (m;
 // 0: inside the box itself). Read-only.
 bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
@@ -59,9 +88,6 @@ bool nodes_near(const Model& model, const BoxLevel& level, const State& state, c
 // (such a pair is looked at when its turn comes). Counts the node tests.
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
                     StageCounters& counters, double margin);
-
-// Mean velocity of a cell's 8 lattice nodes (m/s): the velocity eq. 8 works with.
-Vec3 mean_velocity(const State& state, const std::array<Index, 8>& nodes);
 
 // Teschner et al. 2003: hash of integer grid coordinates (two's complement wrap for
 // negative ones) into `table_size` buckets. It orders the narrow phase's pairs (broad_phase.cpp).

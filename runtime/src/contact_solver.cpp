@@ -243,7 +243,7 @@ void begin_solver_step(const Model& model, State& state, Scratch& scratch) {
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
   predict_dynamics(model, state, scratch);
-  scratch.grab_lambda = Vec3::Zero();
+  scratch.grab_force = Vec3::Zero();
 }
 
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
@@ -266,33 +266,34 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
     if (!scratch.pair_hit[p]) continue;
     for (int half = 0; half < 2; ++half) {
       const Index mover = half == 0 ? pair.a : pair.b, container = half == 0 ? pair.b : pair.a;
-      const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
-      if (planes.degenerate) continue;
       const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
-      const Vec3 relative_velocity =
-          mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]);
-      for (int k = 0; k < node_count; ++k) {
-        const Vec3 node = tested_node(model, level, state, scratch, mover, k);
-        const NodeInBox hit = node_in_box(planes, node, relative_velocity, recent);
-        int face = hit.face;
-        double depth = hit.depth;
-        if (!hit.inside) {
-          // Near, not in: a speculative contact, which holds the node at the face should the
-          // solve move it in, so that a resting contact stays in the list from step to step.
-          const NearFace near = near_face(planes, node, margin);
-          if (near.face < 0) continue;
-          face = near.face;
-          depth = -near.height;
-        } else {
-          if (self) ++counters.self_contacts;
-          else ++counters.inter_contacts;
-          max_depth = std::max(max_depth, depth);
-          scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
-        }
-        add_contact(bodies, scratch, face_point(model, boxes, container, face),
-                    cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth,
-                    box_contact_key(state.params.accuracy, container, face, mover, k), &boxes, container, face);
-      }
+      scan_points_in_box(
+          scratch, container, 0.0, recent, node_count,
+          [&](int k) { return tested_node(model, level, state, scratch, mover, k); },
+          [&] {
+            return Vec3(mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]));
+          },
+          [&](int k, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
+            int face = hit.face;
+            double depth = hit.depth;
+            if (!hit.inside) {
+              // Near, not in: a speculative contact, which holds the node at the face should the
+              // solve move it in, so that a resting contact stays in the list from step to step.
+              const NearFace near = near_face(planes, node, margin);
+              if (near.face < 0) return false;
+              face = near.face;
+              depth = -near.height;
+            } else {
+              if (self) ++counters.self_contacts;
+              else ++counters.inter_contacts;
+              max_depth = std::max(max_depth, depth);
+              scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
+            }
+            add_contact(bodies, scratch, face_point(model, boxes, container, face),
+                        cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth,
+                        box_contact_key(state.params.accuracy, container, face, mover, k), &boxes, container, face);
+            return false;  // answered in the solve, not at once
+          });
     }
   }
 }
@@ -374,20 +375,21 @@ void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, 
       continue;
     const Index cell = boxes.box_cell[b];
     wake(state, model.cell_object[cell]);
-    const BoxPlanes planes = box_planes(scratch.box_nodes[b]);
     // The probe's nodes in the box: the probe (side b) stays out of the box's face (side a).
-    for (int n = 0; n < kProbeNodeCount && !planes.degenerate; ++n) {
-      ++counters.node_tests;
-      const Vec3 node = probe.x + radius * kProbeNodeOffsets[n];
-      const Vec3 relative_velocity = probe.v - mean_velocity(state, model.cell_nodes[cell]);
-      const NodeInBox hit = node_in_box(planes, node, relative_velocity, recent);
-      if (!hit.inside) continue;
-      ++counters.probe_contacts;
-      max_depth = std::max(max_depth, hit.depth);
-      scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
-      add_contact(bodies, scratch, face_point(model, boxes, b, hit.face), probe_point(), planes.normal[hit.face],
-                  hit.depth);
-    }
+    scan_points_in_box(
+        scratch, b, 0.0, recent, kProbeNodeCount,
+        [&](int n) { return Vec3(probe.x + radius * kProbeNodeOffsets[n]); },
+        [&] { return Vec3(probe.v - mean_velocity(state, model.cell_nodes[cell])); },
+        [&](int, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
+          ++counters.node_tests;
+          if (!hit.inside) return false;
+          ++counters.probe_contacts;
+          max_depth = std::max(max_depth, hit.depth);
+          scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
+          add_contact(bodies, scratch, face_point(model, boxes, b, hit.face), probe_point(), planes.normal[hit.face],
+                      hit.depth);
+          return false;
+        });
     // The box's nodes in the sphere: each node (side b) stays out of the sphere (side a).
     for (int n = 0; n < 9; ++n) {
       ++counters.node_tests;
@@ -468,22 +470,22 @@ void project_resting_friction(const Bodies& bodies, Scratch& scratch, double mu)
     project_friction(bodies, scratch.constraints[scratch.friction_contacts[k]], mu);
 }
 
-// The grab as a soft XPBD constraint C = p - target (compliance 1 / k, damping c), solved with
-// the rest, so that a heavy object hangs from it without the explicit spring's overshoot.
+// The grab (interaction.h), solved with the rest as a position correction each iteration:
+// the point moves by dt times the spring's change of velocity, and the force it gave so far
+// (Scratch::grab_force) enters the next, so that a heavy object hangs from it without the
+// explicit spring's overshoot.
 void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
   const GrabState& grab = bodies.state.grab;
   ContactSide side = cell_point(model, grab.cell, grab.local);
   bodies.prepare(side);
   const double w = bodies.weighted_inv_mass(side);
   if (!(w > 0.0)) return;
-  const double h = model.settings.dt, k = model.settings.grab.stiffness, damping = model.settings.grab.damping;
-  const double alpha_tilde = 1.0 / (k * h * h), gamma = damping / (k * h);
+  const double dt = model.settings.dt;
   const Vec3 p = bodies.point(side);
-  const Vec3 moved = p - bodies.point_prev(side);
-  const Vec3 d_lambda = (-(p - grab.target) - alpha_tilde * scratch.grab_lambda - gamma * moved) /
-                        ((1.0 + gamma) * w + alpha_tilde);
-  scratch.grab_lambda += d_lambda;
-  bodies.move(side, d_lambda);
+  const Vec3 velocity = (p - bodies.point_prev(side)) / dt;
+  const Vec3 moved = dt * grab_velocity_change(model, w, grab.target - p, velocity, scratch.grab_force);  // m
+  scratch.grab_force += moved / (w * dt * dt);
+  bodies.move(side, moved / w);
 }
 
 }  // namespace
@@ -816,13 +818,12 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
     probe.v = (probe.x - scratch.probe_x_prev) / dt;
     answer_velocities(model, state, scratch, beta);
     damp_on_supports(model, state, scratch, beta);
-    probe.force = state.params.probe_stiffness * (probe.x - probe.device) +
-                  model.settings.probe.coupling_damping * (probe.v - scratch.probe_device_velocity);
+    probe.force = probe_force(model, state, scratch.probe_device_velocity);
   } else {
     answer_velocities(model, state, scratch, beta);
     damp_on_supports(model, state, scratch, beta);
   }
-  if (grabbing) state.grab.force = scratch.grab_lambda / (dt * dt);
+  if (grabbing) state.grab.force = scratch.grab_force;
 }
 
 }  // namespace ffd

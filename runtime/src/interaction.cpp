@@ -5,7 +5,6 @@
 
 #include "collision.h"
 #include "ffd/box_test.h"
-#include "ffd/response.h"
 #include "ffd/trilinear.h"
 #include "sleep.h"
 
@@ -30,28 +29,11 @@ const std::array<Vec3, kProbeNodeCount> kProbeNodeOffsets = make_probe_node_offs
 
 namespace {
 
-// Section 7 between one lattice cell and the probe proxy. `n` is the direction that
-// separates them for the probe: the probe moves along +n, the cell along -n, the pair's
-// velocities along n are damped by alpha (eq. 8) relative to their mass-weighted mean, and
-// the depth r is split by inverse mass (eq. 9).
+// Section 7 between one lattice cell and the probe proxy: `n` separates them for the probe,
+// which moves along +n, the cell along -n.
 void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3& n, double r, double beta) {
   wake(state, model.cell_object[cell]);
-  const std::array<Index, 8>& nodes = model.cell_nodes[cell];
-  ProbeState& probe = state.probe;
-  const double inv_cell = model.cell_inv_mass[cell], inv_probe = 1.0 / model.settings.probe.mass;
-  const Vec3 v_cell = mean_velocity(state, nodes);
-  const double u = (probe.v - v_cell).dot(n);
-  const PositionShares share = position_shares(inv_cell, inv_probe);
-  if (u < 0.0) {  // approaching
-    const double m_cell = 1.0 / inv_cell, m_probe = model.settings.probe.mass;
-    const Vec3 v_ref = (m_cell * v_cell + m_probe * probe.v) / (m_cell + m_probe);
-    const double alpha = state.params.alpha;
-    const double bounce = rebound(u, r, alpha, kRecentEntrySteps * model.settings.dt);
-    for (Index i : nodes) state.v[i] = respond_velocity(state.v[i], v_ref, n, alpha, beta) - share.a * bounce * n;
-    probe.v = respond_velocity(probe.v, v_ref, n, alpha, beta) + share.b * bounce * n;
-  }
-  for (Index i : nodes) state.x[i] -= share.a * r * n;
-  probe.x += share.b * r * n;
+  answer_at_once(model, state, ResponseSide::of_cell(cell), ResponseSide::probe(), n, r, beta, true);
 }
 
 // The probe against box b both ways: its 27 nodes in the box (node-in-box, eq. 3-7), and
@@ -61,21 +43,21 @@ void probe_against_box(const Model& model, const BoxSet& boxes, State& state, Sc
   const double radius = model.settings.probe.radius;
   const Index cell = boxes.box_cell[b];
   ProbeState& probe = state.probe;
-  BoxPlanes planes = box_planes(scratch.box_nodes[b]);
-  for (int k = 0; k < kProbeNodeCount && !planes.degenerate; ++k) {
-    ++counters.node_tests;
-    const Vec3 node = probe.x + radius * kProbeNodeOffsets[k];
-    const Vec3 relative_velocity = probe.v - mean_velocity(state, model.cell_nodes[cell]);
-    const NodeInBox hit = node_in_box(planes, node, relative_velocity, kRecentEntrySteps * model.settings.dt);
-    if (!hit.inside) continue;
-    ++counters.probe_contacts;
-    max_depth = std::max(max_depth, hit.depth);
-    scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
-    respond_cell_probe(model, state, cell, planes.normal[hit.face], hit.depth, beta);
-    invalidate_around(model, boxes, scratch, cell);
-    ensure_box(model, boxes, state, scratch, b, counters);
-    planes = box_planes(scratch.box_nodes[b]);
-  }
+  scan_points_in_box(
+      scratch, b, 0.0, kRecentEntrySteps * model.settings.dt, kProbeNodeCount,
+      [&](int k) { return Vec3(probe.x + radius * kProbeNodeOffsets[k]); },
+      [&] { return Vec3(probe.v - mean_velocity(state, model.cell_nodes[cell])); },
+      [&](int, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
+        ++counters.node_tests;
+        if (!hit.inside) return false;
+        ++counters.probe_contacts;
+        max_depth = std::max(max_depth, hit.depth);
+        scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
+        respond_cell_probe(model, state, cell, planes.normal[hit.face], hit.depth, beta);
+        invalidate_around(model, boxes, scratch, cell);
+        ensure_box(model, boxes, state, scratch, b, counters);
+        return true;
+      });
   for (int k = 0; k < 9; ++k) {
     ++counters.node_tests;
     const Vec3 offset = scratch.box_nodes[b][k] - probe.x;
@@ -107,6 +89,19 @@ Vec3 step_probe_coupling(const Model& model, State& state) {
   return device_velocity;
 }
 
+Vec3 probe_force(const Model& model, const State& state, const Vec3& device_velocity) {
+  const ProbeState& probe = state.probe;
+  return state.params.probe_stiffness * (probe.x - probe.device) +
+         model.settings.probe.coupling_damping * (probe.v - device_velocity);
+}
+
+Vec3 grab_velocity_change(const Model& model, double inv_mass, const Vec3& to_target, const Vec3& velocity,
+                          const Vec3& force_so_far) {
+  const double dt = model.settings.dt, k = model.settings.grab.stiffness, c = model.settings.grab.damping;
+  return dt * inv_mass * (k * to_target - force_so_far - c * velocity) /
+         (1.0 + dt * c * inv_mass + dt * dt * k * inv_mass);
+}
+
 namespace {
 
 // Virtual coupling (Colgate et al. 1995) integrated by backward Euler, so any stiffness and
@@ -115,7 +110,6 @@ void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& 
                 double& max_depth) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
-  const double k = state.params.probe_stiffness, c = settings.coupling_damping;
   const Vec3 device_velocity = step_probe_coupling(model, state);
 
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
@@ -129,12 +123,11 @@ void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& 
       continue;
     probe_against_box(model, boxes, state, scratch, b, beta, counters, max_depth);
   }
-  probe.force = k * (probe.x - probe.device) + c * (probe.v - device_velocity);
+  probe.force = probe_force(model, state, device_velocity);
 }
 
-// A spring-damper from the grabbed point to its target, integrated by backward Euler on the
-// point's effective mass 1 / sum_j(w_j^2 / m_j), and spread over the cell's 8 nodes so that
-// the point's velocity changes by exactly the solved amount.
+// The grab under the paper's response: the spring's change of velocity, spread over the
+// cell's 8 nodes so that the point's velocity changes by exactly that.
 void step_grab(const Model& model, State& state) {
   GrabState& grab = state.grab;
   wake(state, model.cell_object[grab.cell]);
@@ -147,10 +140,9 @@ void step_grab(const Model& model, State& state) {
     velocity += w[j] * state.v[nodes[j]];
     inv_mass += w[j] * w[j] * model.node_inv_mass[nodes[j]];
   }
-  const double dt = model.settings.dt, k = model.settings.grab.stiffness, c = model.settings.grab.damping;
-  const Vec3 dv = dt * inv_mass * (k * (grab.target - point) - c * velocity) / (1.0 + dt * c * inv_mass + dt * dt * k * inv_mass);
+  const Vec3 dv = grab_velocity_change(model, inv_mass, grab.target - point, velocity, Vec3::Zero());
   for (int j = 0; j < 8; ++j) state.v[nodes[j]] += (w[j] * model.node_inv_mass[nodes[j]] / inv_mass) * dv;
-  grab.force = dv / (inv_mass * dt);
+  grab.force = dv / (inv_mass * model.settings.dt);
 }
 
 }  // namespace

@@ -231,7 +231,7 @@ struct Scratch {
   // The response "solver" (contact_solver.h): the step's contacts as constraints (the list
   // the detection writes and the solve reads; capacity grown between steps), the objects this
   // step solves (awake at its start), the probe's start of step and its device's velocity,
-  // and the grab's multiplier.
+  // and the force the grab has given so far this step (N).
   std::vector<ContactConstraint> constraints;
   Index constraint_count = 0;
   std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
@@ -241,7 +241,7 @@ struct Scratch {
   std::vector<std::uint8_t> object_solving;
   Index object_task_count = 0;
   Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
-  Vec3 grab_lambda = Vec3::Zero();
+  Vec3 grab_force = Vec3::Zero();
   // Rolling resistance and support damping (contact_solver.cpp): per object, its rigid motion
   // this step and what its active contacts carry.
   struct ObjectMotion {
