@@ -11,16 +11,27 @@
 // A pair found in several grid cells is taken only in the cell holding the lower corner of
 // the overlap of the two AABBs, so each pair is found once. The pairs are then sorted, so
 // the narrow phase answers them in an order that depends on nothing but the boxes.
+#include "broad_phase.h"
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
-#include "collision.h"
+#include "ffd/broad_phase.h"
 #include "ffd/worker_pool.h"
-#include "sleep.h"
 
 namespace ffd {
 
 namespace {
+
+// What the searches read: the boxes' AABBs grown by the margins (BoxMemory) and each
+// object's bounds (BroadPhaseMemory).
+struct Bounds {
+  const std::array<std::vector<double>, 3>& box_lo;
+  const std::array<std::vector<double>, 3>& box_hi;
+  const std::vector<std::array<double, 3>>& object_lo;
+  const std::vector<std::array<double, 3>>& object_hi;
+};
 
 // A dense grid over a region: integer cell coordinates clamped into [0, n) per axis, so a
 // box far outside (or non-finite) lands in a border cell and is still paired correctly,
@@ -68,14 +79,14 @@ double grid_cell(const Model& model, double object_cell) {
   return model.settings.hash_cell_size > 0.0 ? model.settings.hash_cell_size : object_cell;
 }
 
-bool overlap(const Scratch& s, Index a, Index b) {
+bool overlap(const Bounds& s, Index a, Index b) {
   for (int axis = 0; axis < 3; ++axis)
     if (!(s.box_lo[axis][a] <= s.box_hi[axis][b] && s.box_lo[axis][b] <= s.box_hi[axis][a])) return false;
   return true;
 }
 
 // The pair is taken in grid cell (x, y, z) only if it holds the lower corner of the overlap.
-bool lower_corner_here(const Grid& g, const Scratch& s, Index a, Index b, int x, int y, int z) {
+bool lower_corner_here(const Grid& g, const Bounds& s, Index a, Index b, int x, int y, int z) {
   return g.coordinate(std::max(s.box_lo[0][a], s.box_lo[0][b]), 0) == x &&
          g.coordinate(std::max(s.box_lo[1][a], s.box_lo[1][b]), 1) == y &&
          g.coordinate(std::max(s.box_lo[2][a], s.box_lo[2][b]), 2) == z;
@@ -90,8 +101,8 @@ double hash_order_cell(const Model& model) {
   return largest > 0.0 ? largest : 1.0;
 }
 
-using PairWorkspace = Scratch::PairWorkspace;
-using PairTask = Scratch::PairTask;
+using PairWorkspace = BroadPhaseMemory::PairWorkspace;
+using PairTask = BroadPhaseMemory::PairTask;
 
 bool push_pair(PairWorkspace& w, Index a, Index b) {
   if (w.pair_count == w.pairs.size()) {
@@ -103,9 +114,9 @@ bool push_pair(PairWorkspace& w, Index a, Index b) {
 }
 
 // Counting sort of the entries of `boxes` into the grid cells their AABBs cover:
-// scratch.grid_begin[c] .. grid_begin[c + 1] hold the boxes of cell c. False if the entry
+// w.grid_begin[c] .. grid_begin[c + 1] hold the boxes of cell c. False if the entry
 // buffer is too small (grow_scratch() makes room between steps).
-bool fill_grid(const Grid& g, const Index* boxes, Index count, const Scratch& s, PairWorkspace& w) {
+bool fill_grid(const Grid& g, const Index* boxes, Index count, const Bounds& s, PairWorkspace& w) {
   const std::size_t cells = g.cells();
   std::fill(w.grid_begin.begin(), w.grid_begin.begin() + cells + 1, 0);
   std::size_t entries = 0;
@@ -144,7 +155,7 @@ bool fill_grid(const Grid& g, const Index* boxes, Index count, const Scratch& s,
 }
 
 // Self-collision of one object: pairs of boxes of cells that share no lattice node.
-void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Scratch& s,
+void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Bounds& s,
                 PairWorkspace& w) {
   const Index first = first_box(boxes, object), last = end_box(boxes, object);
   if (last - first < 2) return;
@@ -199,7 +210,7 @@ void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& obje
 
 // Boxes of `object` whose AABBs reach into [lo, hi].
 Index boxes_within(const BoxSet& boxes, const ObjectModel& object, const std::array<double, 3>& lo,
-                   const std::array<double, 3>& hi, const Scratch& s, Index* out) {
+                   const std::array<double, 3>& hi, const Bounds& s, Index* out) {
   const double *lx = s.box_lo[0].data(), *ly = s.box_lo[1].data(), *lz = s.box_lo[2].data();
   const double *hx = s.box_hi[0].data(), *hy = s.box_hi[1].data(), *hz = s.box_hi[2].data();
   const double lo_x = lo[0], lo_y = lo[1], lo_z = lo[2], hi_x = hi[0], hi_y = hi[1], hi_z = hi[2];
@@ -213,7 +224,7 @@ Index boxes_within(const BoxSet& boxes, const ObjectModel& object, const std::ar
 }
 
 // Pairs between two objects whose bounds overlap.
-void object_pairs(const Model& model, const BoxSet& boxes, Index oa, Index ob, const Scratch& s, PairWorkspace& w) {
+void object_pairs(const Model& model, const BoxSet& boxes, Index oa, Index ob, const Bounds& s, PairWorkspace& w) {
   const ObjectModel& A = model.objects[oa];
   const ObjectModel& B = model.objects[ob];
   Index* list_a = w.box_list_a.data();
@@ -256,7 +267,7 @@ void object_pairs(const Model& model, const BoxSet& boxes, Index oa, Index ob, c
 
 // Pairs of boxes of one object's cells that share a lattice node (touching by construction)
 // and whose AABBs overlap: from the lattice's neighbour lists, no search.
-void neighbour_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Scratch& s,
+void neighbour_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Bounds& s,
                      PairWorkspace& w) {
   for (Index c = object.cell_begin; c < object.cell_end; ++c)
     for (Index a = boxes.cell_box_begin[c]; a < boxes.cell_box_begin[c + 1]; ++a)
@@ -270,18 +281,18 @@ void neighbour_pairs(const Model& model, const BoxSet& boxes, const ObjectModel&
 
 // Sorts keyed pairs by (key, b): std::sort when few, else a least-significant-digit radix
 // sort, 8 bits a pass (b's 3 bytes, then the key's 8), stable, in O(n).
-void sort_pair_keys(Scratch::PairKey* keys, Scratch::PairKey* spare, Index count, Index* counts) {
-  auto less = [](const Scratch::PairKey& x, const Scratch::PairKey& y) {
+void sort_pair_keys(BroadPhaseMemory::PairKey* keys, BroadPhaseMemory::PairKey* spare, Index count, Index* counts) {
+  auto less = [](const BroadPhaseMemory::PairKey& x, const BroadPhaseMemory::PairKey& y) {
     return x.key < y.key || (x.key == y.key && x.pair.b < y.pair.b);
   };
   if (count < 2048) {
     std::sort(keys, keys + count, less);
     return;
   }
-  Scratch::PairKey* from = keys;
-  Scratch::PairKey* to = spare;
+  BroadPhaseMemory::PairKey* from = keys;
+  BroadPhaseMemory::PairKey* to = spare;
   for (int pass = 0; pass < 11; ++pass) {
-    auto digit = [pass](const Scratch::PairKey& k) -> Index {
+    auto digit = [pass](const BroadPhaseMemory::PairKey& k) -> Index {
       return pass < 3 ? (k.pair.b >> (8 * pass)) & 0xFF : static_cast<Index>((k.key >> (8 * (pass - 3))) & 0xFF);
     };
     std::fill(counts, counts + 257, 0);
@@ -296,6 +307,62 @@ void sort_pair_keys(Scratch::PairKey* keys, Scratch::PairKey* spare, Index count
 
 }  // namespace
 
+namespace {
+
+void make_workspace(std::size_t boxes, PairWorkspace& w) {
+  w.box_list_a.resize(boxes);
+  w.box_list_b.resize(boxes);
+  w.box_range.resize(boxes);
+  w.grid_begin.resize(kBroadPhaseGridCells + 1);
+  w.grid_cursor.resize(kBroadPhaseGridCells + 1);
+  w.grid_entries.resize(8 * boxes + 64);
+  for (std::vector<int>& c : w.cell_lattice) c.resize(boxes);
+  w.cell_far.resize(boxes);
+  w.pairs.resize(8 * boxes + 64);
+}
+
+}  // namespace
+
+void size_broad_phase_memory(const Model& model, BroadPhaseMemory& memory, std::size_t threads) {
+  if (!model.collides) return;
+  const std::size_t boxes = largest_box_set(model);
+  if (memory.pair_workspaces.empty()) {
+    memory.object_lo.resize(model.objects.size());
+    memory.object_hi.resize(model.objects.size());
+    memory.object_order.resize(model.objects.size());
+    memory.pair_tasks.resize(32 * model.objects.size() + 64);
+    memory.pairs.resize(8 * boxes + 64);
+    memory.pair_keys.resize(memory.pairs.size());
+    memory.pair_sorted_keys.resize(memory.pairs.size());
+  }
+  while (memory.pair_workspaces.size() < std::max<std::size_t>(threads, 1)) {
+    memory.pair_workspaces.emplace_back();
+    make_workspace(boxes, memory.pair_workspaces.back());
+    // As much room as the first workspace has grown to.
+    memory.pair_workspaces.back().grid_entries.resize(memory.pair_workspaces[0].grid_entries.size());
+    memory.pair_workspaces.back().pairs.resize(memory.pair_workspaces[0].pairs.size());
+  }
+}
+
+void grow_broad_phase_memory(const Model& model, BroadPhaseMemory& memory) {
+  if (!model.collides) return;
+  // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,
+  // not a large one: stop growing there and keep reporting the overflow.
+  const std::size_t boxes = largest_box_set(model);
+  const std::size_t entry_limit = 512 * (8 * boxes + 64), pair_limit = 256 * (4 * boxes + 64);
+  auto grow = [](auto& v, std::size_t limit) {
+    if (v.size() < limit) v.resize(std::min(limit, 2 * v.size()));
+  };
+  for (PairWorkspace& w : memory.pair_workspaces) {
+    grow(w.grid_entries, entry_limit);
+    grow(w.pairs, pair_limit);
+  }
+  grow(memory.pair_tasks, 256 * (32 * model.objects.size() + 64));
+  grow(memory.pairs, pair_limit);
+  memory.pair_keys.resize(memory.pairs.size());
+  memory.pair_sorted_keys.resize(memory.pairs.size());
+}
+
 std::int64_t hash_grid_coordinate(double x, double inv_cell) {
   constexpr double kLimit = 4503599627370496.0;  // 2^52: beyond it cells are meaningless anyway
   const double v = x * inv_cell;
@@ -307,14 +374,14 @@ std::int64_t hash_grid_coordinate(double x, double inv_cell) {
   return static_cast<double>(t) > v ? t - 1 : t;
 }
 
-void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, Scratch& s) {
-  const bool wake = !s.box_wake_margin.empty();
+void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, BoxMemory& bounds, BroadPhaseMemory& s) {
+  const bool wake = !bounds.box_wake_margin.empty();
   if (margin > 0.0 || wake)
     for (Index b = 0; b < boxes.size(); ++b) {
-      const double grow = margin + (wake ? s.box_wake_margin[b] : 0.0);
+      const double grow = margin + (wake ? bounds.box_wake_margin[b] : 0.0);
       for (int axis = 0; axis < 3; ++axis) {
-        s.box_lo[axis][b] -= grow;
-        s.box_hi[axis][b] += grow;
+        bounds.box_lo[axis][b] -= grow;
+        bounds.box_hi[axis][b] += grow;
       }
     }
   for (Index o = 0; o < model.objects.size(); ++o) {
@@ -322,15 +389,17 @@ void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, Scr
     std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (Index b = first_box(boxes, object); b < end_box(boxes, object); ++b)
       for (int axis = 0; axis < 3; ++axis) {
-        lo[axis] = std::min(lo[axis], s.box_lo[axis][b]);
-        hi[axis] = std::max(hi[axis], s.box_hi[axis][b]);
+        lo[axis] = std::min(lo[axis], bounds.box_lo[axis][b]);
+        hi[axis] = std::max(hi[axis], bounds.box_hi[axis][b]);
       }
     s.object_lo[o] = lo;
     s.object_hi[o] = hi;
   }
 }
 
-bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query, Scratch& s, StageCounters& counters) {
+bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query, const BoxMemory& box_memory,
+                BroadPhaseMemory& s, WorkerPool* pool, StageCounters& counters) {
+  const Bounds bounds{box_memory.box_lo, box_memory.box_hi, s.object_lo, s.object_hi};
   s.pair_count = 0;
   s.pairs_dropped = false;
   const Index objects = static_cast<Index>(model.objects.size());
@@ -381,15 +450,15 @@ bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query,
     for (Index t = chunk * per_chunk; t < std::min(tasks, (chunk + 1) * per_chunk); ++t) {
       const PairTask task = s.pair_tasks[t];
       if (task.a != task.b) {
-        object_pairs(model, boxes, task.a, task.b, s, w);
+        object_pairs(model, boxes, task.a, task.b, bounds, w);
         continue;
       }
-      if (query.self) self_pairs(model, boxes, model.objects[task.a], s, w);
-      if (query.neighbours) neighbour_pairs(model, boxes, model.objects[task.a], s, w);
+      if (query.self) self_pairs(model, boxes, model.objects[task.a], bounds, w);
+      if (query.neighbours) neighbour_pairs(model, boxes, model.objects[task.a], bounds, w);
     }
   };
   const Index chunks = (tasks + per_chunk - 1) / per_chunk;
-  if (s.pool && s.pair_workspaces.size() >= static_cast<std::size_t>(s.pool->threads())) s.pool->parallel_for(chunks, run);
+  if (pool && s.pair_workspaces.size() >= static_cast<std::size_t>(pool->threads())) pool->parallel_for(chunks, run);
   else
     for (Index c = 0; c < chunks; ++c) run(c, 0);
   for (const PairWorkspace& w : s.pair_workspaces) {
@@ -417,9 +486,9 @@ bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query,
     const BoxPair& pair = s.pairs[p];
     std::int64_t g[3], first[3], span[3];
     for (int axis = 0; axis < 3; ++axis) {
-      g[axis] = hash_grid_coordinate(std::max(s.box_lo[axis][pair.a], s.box_lo[axis][pair.b]), inv_cell);
-      first[axis] = hash_grid_coordinate(s.box_lo[axis][pair.a], inv_cell);
-      span[axis] = hash_grid_coordinate(s.box_hi[axis][pair.a], inv_cell) - first[axis] + 1;
+      g[axis] = hash_grid_coordinate(std::max(bounds.box_lo[axis][pair.a], bounds.box_lo[axis][pair.b]), inv_cell);
+      first[axis] = hash_grid_coordinate(bounds.box_lo[axis][pair.a], inv_cell);
+      span[axis] = hash_grid_coordinate(bounds.box_hi[axis][pair.a], inv_cell) - first[axis] + 1;
     }
     const std::uint64_t bucket = spatial_hash(g[0], g[1], g[2], table);
     const std::int64_t rank = ((g[2] - first[2]) * span[1] + (g[1] - first[1])) * span[0] + (g[0] - first[0]);
@@ -432,59 +501,65 @@ bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query,
   return !s.pairs_dropped;
 }
 
-bool find_candidate_pairs(const Model& model, const BoxLevel& level, const State& state, Scratch& s,
-                          StageCounters& counters) {
+bool find_candidate_pairs(const Model& model, const BoxLevel& level, const BoxMemory& bounds, BroadPhaseMemory& memory,
+                          WorkerPool* pool, StageCounters& counters) {
   PairQuery query;
   query.inter = has(model.settings.effects, Effect::InterCollision);
   query.self = has(model.settings.effects, Effect::SelfCollision);
   // Objects asleep are paired too: the narrow phase passes over a pair of two sleepers as it
   // comes to it, since a pair answered before may have woken one of them.
-  (void)state;
-  return find_pairs(model, *level.boxes, query, s, counters);
+  return find_pairs(model, *level.boxes, query, bounds, memory, pool, counters);
 }
 
 }  // namespace ffd
 
 // ---- BroadPhase (ffd/broad_phase.h) ----
-#include "ffd/broad_phase.h"
 
 namespace ffd {
 
-BroadPhase::BroadPhase(const Model& model) : model_(model), scratch_(make_scratch(model)) {}
+struct BroadPhase::Memory {
+  BoxMemory boxes;
+  BroadPhaseMemory pairs;
+};
+
+BroadPhase::BroadPhase(const Model& model) : model_(model), memory_(std::make_unique<Memory>()) {
+  size_box_memory(model, memory_->boxes);
+  size_broad_phase_memory(model, memory_->pairs, 1);
+}
+
+BroadPhase::~BroadPhase() = default;
 
 void BroadPhase::set_boxes(const std::vector<std::array<Vec3, 9>>& boxes) {
   if (boxes.size() != model_.box_count()) throw std::invalid_argument("BroadPhase::set_boxes: box count differs from the model's");
-  std::copy(boxes.begin(), boxes.end(), scratch_.box_nodes.begin());
+  std::copy(boxes.begin(), boxes.end(), memory_->boxes.box_nodes.begin());
 }
 
 bool BroadPhase::find(bool neighbours, std::vector<std::pair<Index, Index>>& pairs) {
+  BoxMemory& bounds = memory_->boxes;
+  BroadPhaseMemory& found = memory_->pairs;
   const Index count = static_cast<Index>(model_.box_count());
   for (Index b = 0; b < count; ++b) {
-    const std::array<Vec3, 9>& nodes = scratch_.box_nodes[b];
+    const std::array<Vec3, 9>& nodes = bounds.box_nodes[b];
     Vec3 lo = nodes[0], hi = nodes[0];
     for (int k = 1; k < 9; ++k) {
       lo = lo.cwiseMin(nodes[k]);
       hi = hi.cwiseMax(nodes[k]);
     }
     for (int axis = 0; axis < 3; ++axis) {
-      scratch_.box_lo[axis][b] = lo[axis];
-      scratch_.box_hi[axis][b] = hi[axis];
+      bounds.box_lo[axis][b] = lo[axis];
+      bounds.box_hi[axis][b] = hi[axis];
     }
   }
-  grow_box_bounds(model_, model_.boxes, 0.0, scratch_);
+  grow_box_bounds(model_, model_.boxes, 0.0, bounds, found);
   PairQuery query;
   query.inter = query.self = true;
   query.neighbours = neighbours;
   query.ordered = !neighbours;  // every pair, as a general broad phase reports them: no order
   StageCounters counters;
-  const bool complete = find_pairs(model_, model_.boxes, query, scratch_, counters);
-  pairs.resize(scratch_.pair_count);
-  for (Index p = 0; p < scratch_.pair_count; ++p) pairs[p] = {scratch_.pairs[p].a, scratch_.pairs[p].b};
-  if (!complete) {
-    StepReport last;
-    last.hash_overflow = true;
-    grow_scratch(model_, scratch_, last);
-  }
+  const bool complete = find_pairs(model_, model_.boxes, query, bounds, found, nullptr, counters);
+  pairs.resize(found.pair_count);
+  for (Index p = 0; p < found.pair_count; ++p) pairs[p] = {found.pairs[p].a, found.pairs[p].b};
+  if (!complete) grow_broad_phase_memory(model_, found);
   return complete;
 }
 
@@ -492,10 +567,12 @@ bool BroadPhase::find_all_pairs(std::vector<std::pair<Index, Index>>& pairs) { r
 bool BroadPhase::find_wanted_pairs(std::vector<std::pair<Index, Index>>& pairs) { return find(false, pairs); }
 
 Vec3 BroadPhase::box_min(Index b) const {
-  return Vec3(scratch_.box_lo[0][b], scratch_.box_lo[1][b], scratch_.box_lo[2][b]);
+  const BoxMemory& bounds = memory_->boxes;
+  return Vec3(bounds.box_lo[0][b], bounds.box_lo[1][b], bounds.box_lo[2][b]);
 }
 Vec3 BroadPhase::box_max(Index b) const {
-  return Vec3(scratch_.box_hi[0][b], scratch_.box_hi[1][b], scratch_.box_hi[2][b]);
+  const BoxMemory& bounds = memory_->boxes;
+  return Vec3(bounds.box_hi[0][b], bounds.box_hi[1][b], bounds.box_hi[2][b]);
 }
 
 }  // namespace ffd

@@ -14,69 +14,6 @@
 
 namespace ffd {
 
-BoxLevel box_level(const Model& model, Accuracy accuracy) {
-  const double skin = model.box_skin;
-  // The exact edges are tested between objects: a scene without inter-collision has none, at
-  // any level (its objects, if several, do not collide with each other at all).
-  const bool between = has(model.settings.effects, Effect::InterCollision);
-  const bool edges = between && model.settings.edge_contacts;  // levels 0-3: the scene's choice
-  switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, edges, skin};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, edges, skin};
-    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, edges, skin};
-    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, edges, skin};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, between, std::max(skin, model.sub_box_skin)};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, between, skin};
-  }
-  return {&model.boxes, 0, 9, false, false, edges, skin};
-}
-
-namespace {
-BoxOutput box_output(Scratch& scratch, bool bounds) {
-  BoxOutput out{scratch.box_nodes.data(), {nullptr, nullptr, nullptr}, {nullptr, nullptr, nullptr}, scratch.box_valid.data()};
-  if (bounds)
-    for (int axis = 0; axis < 3; ++axis) {
-      out.lo[axis] = scratch.box_lo[axis].data();
-      out.hi[axis] = scratch.box_hi[axis].data();
-    }
-  return out;
-}
-}  // namespace
-
-void update_box(const Model&, const BoxSet& boxes, const State& state, Scratch& scratch, Index b) {
-  // The AABB too: the planes' early-out reads it (it stays grown by no broad-phase margin).
-  update_one_box(boxes, b, state.x.data()->data(), box_output(scratch, true));
-}
-
-void update_boxes(const Model&, const BoxSet& boxes, const State& state, Scratch& scratch) {
-  const BoxOutput out = box_output(scratch, true);
-  const double* x = state.x.data()->data();
-  const Index blocks = static_cast<Index>(boxes.block_count());
-  constexpr Index kBlocksPerChunk = 64;  // 256 boxes: a few microseconds of work
-  const Index chunks = (blocks + kBlocksPerChunk - 1) / kBlocksPerChunk;
-  auto run = [&](std::uint32_t chunk, std::uint32_t) {
-    update_box_blocks(boxes, chunk * kBlocksPerChunk, std::min(blocks, (chunk + 1) * kBlocksPerChunk), x, out);
-  };
-  parallel_for(scratch.pool, chunks, run);
-}
-
-void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell) {
-  for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
-    const Index c = model.cell_neighbours[i];
-    for (Index b = boxes.cell_box_begin[c]; b < boxes.cell_box_begin[c + 1]; ++b) {
-      scratch.box_valid[b] = 0;
-      scratch.box_moved[b] = 1;
-    }
-  }
-}
-
-void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b,
-                StageCounters& counters) {
-  if (scratch.box_valid[b]) return;
-  update_box(model, boxes, state, scratch, b);
-  ++counters.boxes_updated;
-}
-
 namespace {
 
 // Whether a static plane holds `cell` against a push along `push` (unit): a node of the cell
@@ -116,7 +53,7 @@ void respond_pair(const Model& model, State& state, Index cell_a, Index cell_b, 
 
 }  // namespace
 
-Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index b, int k) {
+Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index b, int k) {
   const int box_node_count = level.end_node - level.first_node;
   if (k < box_node_count) return scratch.box_nodes[b][level.first_node + k];
   const std::array<Index, 8>& corner = model.cell_nodes[level.boxes->box_cell[b]];
@@ -142,8 +79,8 @@ struct PairSink {
   StageCounters& counters;
   double& max_depth;
   Index& retested;
-  Scratch& scratch;
-  Scratch::NarrowWorkspace* workspace = nullptr;  // none: straight into the step's list
+  CollisionMemory& scratch;
+  NarrowMemory::NarrowWorkspace* workspace = nullptr;  // none: straight into the step's list
   std::uint64_t next_key = 0;
 
   void record(const Vec3& point, const Vec3& normal, double depth, ContactKind kind) {
@@ -152,11 +89,11 @@ struct PairSink {
       return;
     }
     // Keep the contacts.size() smallest keys: the front of the max-heap is the largest held.
-    Scratch::NarrowWorkspace& w = *workspace;
+    NarrowMemory::NarrowWorkspace& w = *workspace;
     ++w.recorded;
-    const Scratch::KeyedContact contact{next_key++, {point, normal, depth, kind}};
+    const NarrowMemory::KeyedContact contact{next_key++, {point, normal, depth, kind}};
     const auto begin = w.contacts.begin();
-    const auto by_key = [](const Scratch::KeyedContact& a, const Scratch::KeyedContact& b) { return a.key < b.key; };
+    const auto by_key = [](const NarrowMemory::KeyedContact& a, const NarrowMemory::KeyedContact& b) { return a.key < b.key; };
     if (w.held < w.contacts.size()) {
       w.contacts[w.held++] = contact;
       std::push_heap(begin, begin + w.held, by_key);
@@ -171,7 +108,7 @@ struct PairSink {
 // Nodes of box `mover` against box `container` (one half of Algorithm 1's inner loop), each
 // found inside answered at once.
 template <bool kFriction>
-void test_nodes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index mover, Index container,
+void test_nodes(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, Index mover, Index container,
                 bool self, PairSink& sink) {
   StageCounters& counters = sink.counters;
   const BoxSet& boxes = *level.boxes;
@@ -211,13 +148,13 @@ Vec3 surface_vertex(const Model& model, const std::vector<Vec3>& x, Index v) {
 }
 
 // The surface cache is stale: the lattice moved since the last surface tests.
-void begin_surface_tests(Scratch& scratch) {
+void begin_surface_tests(CollisionMemory& scratch) {
   std::fill(scratch.surface_cell_fresh.begin(), scratch.surface_cell_fresh.end(), std::uint8_t{0});
   scratch.surface_step_epoch = ++scratch.surface_epoch;
 }
 
 // Maps the surface vertices of `cell` (and their AABB) into the level-5 cache.
-void refresh_cell_vertices(const Model& model, const State& state, Scratch& scratch, Index cell) {
+void refresh_cell_vertices(const Model& model, const State& state, CollisionMemory& scratch, Index cell) {
   Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
   for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
     const Index v = model.cell_vertices[i];
@@ -234,14 +171,14 @@ void refresh_cell_vertices(const Model& model, const State& state, Scratch& scra
 }
 
 // Surface vertex v as the lattice is now: the same value surface_vertex() gives.
-const Vec3& cached_vertex(const Model& model, const State& state, Scratch& scratch, Index v) {
+const Vec3& cached_vertex(const Model& model, const State& state, CollisionMemory& scratch, Index v) {
   const Index cell = model.surface_vertex_cell[v];
   if (!scratch.surface_cell_fresh[cell]) refresh_cell_vertices(model, state, scratch, cell);
   return scratch.surface_x[v];
 }
 
 // A response moved the nodes of `cell`: the vertices of every cell sharing one are stale.
-void invalidate_surface_around(const Model& model, Scratch& scratch, Index cell) {
+void invalidate_surface_around(const Model& model, CollisionMemory& scratch, Index cell) {
   ++scratch.surface_epoch;
   for (Index i = model.cell_neighbour_begin[cell]; i < model.cell_neighbour_begin[cell + 1]; ++i) {
     scratch.surface_cell_fresh[model.cell_neighbours[i]] = 0;
@@ -249,7 +186,7 @@ void invalidate_surface_around(const Model& model, Scratch& scratch, Index cell)
   }
 }
 
-bool triangle_bounds_valid(const Model& model, const Scratch& scratch, Index cell) {
+bool triangle_bounds_valid(const Model& model, const CollisionMemory& scratch, Index cell) {
   const std::uint64_t stamp = scratch.cell_triangle_stamp[cell];
   if (stamp < scratch.surface_step_epoch) return false;
   for (Index i = model.cell_triangle_source_begin[cell]; i < model.cell_triangle_source_begin[cell + 1]; ++i)
@@ -258,7 +195,7 @@ bool triangle_bounds_valid(const Model& model, const Scratch& scratch, Index cel
 }
 
 // AABB of the corners of triangles[begin, end) as the lattice is now (empty: lo > hi).
-void triangles_bounds(const Model& model, const State& state, Scratch& scratch, const std::vector<Index>& triangles,
+void triangles_bounds(const Model& model, const State& state, CollisionMemory& scratch, const std::vector<Index>& triangles,
                       Index begin, Index end, Vec3& lo, Vec3& hi) {
   lo = Vec3::Constant(INFINITY);
   hi = Vec3::Constant(-INFINITY);
@@ -271,7 +208,7 @@ void triangles_bounds(const Model& model, const State& state, Scratch& scratch, 
 }
 
 // AABB of the corners of the triangles of `cell`, from the cache.
-void cell_triangle_bounds(const Model& model, const State& state, Scratch& scratch, Index cell, Vec3& lo, Vec3& hi) {
+void cell_triangle_bounds(const Model& model, const State& state, CollisionMemory& scratch, Index cell, Vec3& lo, Vec3& hi) {
   if (!triangle_bounds_valid(model, scratch, cell)) {
     Vec3 l, h;
     triangles_bounds(model, state, scratch, model.cell_triangles, model.cell_triangle_begin[cell],
@@ -315,7 +252,7 @@ bool behind(const Vec3& p, const Vec3& closest, const Vec3& normal) {
 // plane alone, a vertex beside a letter's acute corner and in front of the other wall read as
 // inside, and was pushed into the floor every step
 // (docs/notes/2026-11-28-code-findings.md#corner-judgement).
-bool behind_every_face_at(const Model& model, const State& state, Scratch& scratch, const Vec3& p, const Vec3& closest,
+bool behind_every_face_at(const Model& model, const State& state, CollisionMemory& scratch, const Vec3& p, const Vec3& closest,
                           Index tri, Feature feature) {
   const std::array<Index, 3>& corners = model.surface_triangles[tri];
   Index u = 0, w = 0;  // the corner, or the edge's two ends (w == u for a corner)
@@ -356,7 +293,7 @@ bool cell_inverted(const Model& model, const State& state, Index cell) {
 // cells that share a node with cell_b are p's own surface and are left out, as the pair test
 // leaves them out. Returns false if the closest triangle lies in an inverted cell: then
 // inside or outside is unknown.
-bool closest_around(const Model& model, const State& state, Scratch& scratch, Index cell_a, Index cell_b, bool self,
+bool closest_around(const Model& model, const State& state, CollisionMemory& scratch, Index cell_a, Index cell_b, bool self,
                     Index v, const Vec3& p, double& best_sq, Vec3& best_point, Vec3& best_normal, Index& best_triangle,
                     Feature& best_feature) {
   bool reliable = true;
@@ -407,7 +344,7 @@ CellSurface owned_surface(const Model& model) {
 // The corners and AABBs (by axis too) of cell_a's triangles as the lattice is now, into the
 // scratch arrays triangle_corners, triangle_min/max and triangle_lo/hi; false if some corner
 // is not finite.
-bool load_triangles(const Model& model, const State& state, Scratch& scratch, Index cell_a,
+bool load_triangles(const Model& model, const State& state, CollisionMemory& scratch, Index cell_a,
                     const CellSurface& surface) {
   const Index tri_begin = surface.triangle_begin[cell_a], tri_count = surface.triangle_begin[cell_a + 1] - tri_begin;
   Vec3* corners = scratch.triangle_corners.data();
@@ -437,7 +374,7 @@ bool load_triangles(const Model& model, const State& state, Scratch& scratch, In
 // per vertex would push the same two cells dozens of times in one step and store the
 // pushes in the springs.
 template <bool kFriction>
-void test_vertices(const Model& model, State& state, Scratch& scratch, Index cell_b, Index cell_a, bool self,
+void test_vertices(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a, bool self,
                    StageCounters& counters, double& max_depth) {
   const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
   if (tri_begin == tri_end) return;
@@ -624,7 +561,7 @@ bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& d
 // answered: there the edge contacts left more surfaces crossed than without them
 // (docs/notes/2026-11-28-code-findings.md#edges-within-one-object-and-under-the-solver).
 template <bool kFriction>
-void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b, Index cell_a,
+void test_edges(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a,
                 const CellSurface& surface, StageCounters& counters, double& max_depth) {
   const Index tri_begin = surface.triangle_begin[cell_a], tri_end = surface.triangle_begin[cell_a + 1];
   const Index edge_begin = surface.edge_begin[cell_b], edge_end = surface.edge_begin[cell_b + 1];
@@ -748,7 +685,7 @@ void test_edges(const Model& model, State& state, Scratch& scratch, Index cell_b
 // boxes: paired by boxes, an edge passed through another surface unseen, and found crossed
 // steps later it was pushed out on the far side (the fast_impact hard case: a bullet through
 // its plate). A cell that owns no triangle keeps its box's bounds.
-void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch,
+void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
                              StageCounters& counters) {
   // Every cell's surface vertices, then every box's bounds, in chunks over the pool: a chunk
   // writes only its own cells' vertices and its own boxes' bounds, and the values are the ones
@@ -778,11 +715,11 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
   });
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
-  grow_box_bounds(model, boxes, 0.0, scratch);
+  grow_box_bounds(model, boxes, 0.0, scratch, scratch);
   PairQuery query;
   query.inter = true;
   query.ordered = false;  // sorted by cells below
-  find_pairs(model, boxes, query, scratch, counters);
+  find_pairs(model, boxes, query, scratch, scratch, scratch.pool, counters);
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
 }
@@ -795,7 +732,7 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
 // once made stayed (docs/results/piles.md: the rows without edge contacts); the exact edges
 // send a crossed edge back the way it came.
 template <bool kFriction>
-void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
+void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch,
                           StageCounters& counters, double& max_depth) {
   begin_surface_tests(scratch);
   const bool by_cells = &boxes != &model.sub_boxes;  // levels 0-3
@@ -820,7 +757,7 @@ void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state,
 
 }  // namespace
 
-bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index mover,
                 Index container, double margin) {
   const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
   if (planes.degenerate) return false;
@@ -833,7 +770,7 @@ bool nodes_near(const Model& model, const BoxLevel& level, const State& state, c
 namespace {
 
 // box_overlap() on boxes a and b as the scratch holds them; a degenerate box overlaps nothing.
-BoxOverlap boxes_overlap(const Scratch& scratch, Index a, Index b, double skin,
+BoxOverlap boxes_overlap(const CollisionMemory& scratch, Index a, Index b, double skin,
                          const Vec3& relative_velocity = Vec3::Zero(), double recent = 0.0) {
   const BoxPlanes planes_a = box_planes(scratch.box_nodes[a]), planes_b = box_planes(scratch.box_nodes[b]);
   if (planes_a.degenerate || planes_b.degenerate) return BoxOverlap{};
@@ -846,7 +783,7 @@ BoxOverlap boxes_overlap(const Scratch& scratch, Index a, Index b, double skin,
 // the last two steps, else the shortest way out. Thin boxes crossing like an X hold no node
 // of each other, or only a corner just inside.
 template <bool kFriction>
-void separate_boxes(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, Index b1, Index b2,
+void separate_boxes(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, Index b1, Index b2,
                     PairSink& sink) {
   ensure_box(model, boxes, state, scratch, b1, sink.counters);
   ensure_box(model, boxes, state, scratch, b2, sink.counters);
@@ -872,7 +809,7 @@ void separate_boxes(const Model& model, const BoxSet& boxes, State& state, Scrat
 // the other, or whose boxes a response has moved since the detection, is tested again, and
 // each node found inside gets its response at once.
 template <bool kFriction>
-void answer_pair(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, Index p, PairSink& sink) {
+void answer_pair(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, Index p, PairSink& sink) {
   const BoxSet& boxes = *level.boxes;
   const Index b1 = scratch.pairs[p].a, b2 = scratch.pairs[p].b;
   const Index object_1 = model.cell_object[boxes.box_cell[b1]], object_2 = model.cell_object[boxes.box_cell[b2]];
@@ -901,7 +838,7 @@ void answer_pair(const Model& model, const BoxLevel& level, State& state, Scratc
 // Worth it where the list holds many objects (the letters); a few objects (two teapots) make
 // about as many waves as pairs, and one thread answers them in order.
 template <bool kFriction>
-bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch,
                      StageCounters& counters, double& max_depth, Index& retested) {
   constexpr Index kMinPairs = 64, kMinPairsPerWave = 2;  // below: waits and hand-offs cost more than they save
   constexpr Index kPairsPerChunk = 16;
@@ -934,7 +871,7 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   for (std::uint32_t w = waves; w > 0; --w) begin[w] = begin[w - 1];  // back to each wave's first pair
   begin[0] = 0;
 
-  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) {
+  for (NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) {
     w.counters = StageCounters{};
     w.max_depth = 0.0;
     w.retested = 0;
@@ -947,7 +884,7 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   // furthest behind never waits, so the answering always progresses.
   const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
   scratch.pool->parallel_for(chunks, [&](std::uint32_t chunk, std::uint32_t thread) {
-    Scratch::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
+    NarrowMemory::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
     PairSink sink{w.counters, w.max_depth, w.retested, scratch, &w};
     for (Index i = chunk * kPairsPerChunk; i < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++i) {
       const Index p = scratch.wave_pairs[i];
@@ -967,9 +904,9 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   });
 
   // The threads' shares, summed; their contacts merged in key order into the step's list.
-  const auto by_key = [](const Scratch::KeyedContact& a, const Scratch::KeyedContact& b) { return a.key < b.key; };
+  const auto by_key = [](const NarrowMemory::KeyedContact& a, const NarrowMemory::KeyedContact& b) { return a.key < b.key; };
   std::uint64_t found = 0;
-  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) {
+  for (NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) {
     const StageCounters& c = w.counters;
     counters.boxes_updated += c.boxes_updated;
     counters.node_tests += c.node_tests;
@@ -985,8 +922,8 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
   }
   std::uint64_t kept = 0;
   while (scratch.contact_count < scratch.contacts.size()) {
-    Scratch::NarrowWorkspace* next = nullptr;
-    for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces)
+    NarrowMemory::NarrowWorkspace* next = nullptr;
+    for (NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces)
       if (w.merged < w.held && (!next || w.contacts[w.merged].key < next->contacts[next->merged].key)) next = &w;
     if (!next) break;
     scratch.contacts[scratch.contact_count++] = next->contacts[next->merged++].contact;
@@ -998,7 +935,7 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Sc
 
 }  // namespace
 
-void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
+void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,
                     StageCounters& counters, double margin) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
@@ -1023,7 +960,7 @@ void find_pair_hits(const Model& model, const BoxLevel& level, const State& stat
 }
 
 template <bool kFriction>
-void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+void collide_boxes(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, StageCounters& counters,
                    double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
@@ -1059,7 +996,7 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scra
 }
 
 template <bool kFriction>
-void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth) {
+void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = model.boxes;
   begin_surface_tests(scratch);
   for (Index p = 0; p < scratch.pair_count; ++p) {
@@ -1079,7 +1016,7 @@ void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageC
 }
 
 template <bool kFriction>
-void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+void collide_planes(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, StageCounters& counters,
                     double& max_depth) {
   const double beta = kFriction ? state.params.beta : 0.0;
   const BoxSet& boxes = *level.boxes;
@@ -1134,11 +1071,11 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Scr
   }
 }
 
-template void collide_boxes<true>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
-template void collide_boxes<false>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
-template void collide_surfaces<true>(const Model&, State&, Scratch&, StageCounters&, double&);
-template void collide_surfaces<false>(const Model&, State&, Scratch&, StageCounters&, double&);
-template void collide_planes<true>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
-template void collide_planes<false>(const Model&, const BoxLevel&, State&, Scratch&, StageCounters&, double&);
+template void collide_boxes<true>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);
+template void collide_boxes<false>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);
+template void collide_surfaces<true>(const Model&, State&, CollisionMemory&, StageCounters&, double&);
+template void collide_surfaces<false>(const Model&, State&, CollisionMemory&, StageCounters&, double&);
+template void collide_planes<true>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);
+template void collide_planes<false>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);
 
 }  // namespace ffd

@@ -1,7 +1,14 @@
 #pragma once
-// Collision stages: FFD AABB update (section 4), broad phase (6.1), node-in-box
-// narrow phase with immediate response (6.2, 7, Algorithm 1) and static planes, at the
-// accuracy level the State asks for (spec.h, Accuracy).
+// The NarrowPhase and Planes stages: node-in-box tests (section 6.2) with the paper's
+// immediate response (section 7, Algorithm 1), the exact level's surface tests, and static
+// planes, at the accuracy level the State asks for (spec.h, Accuracy), over the broad
+// phase's pairs (broad_phase.h) of the boxes (boxes.h).
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "boxes.h"
+#include "broad_phase.h"
 #include "ffd/box_test.h"
 #include "ffd/model.h"
 #include "ffd/step.h"
@@ -9,46 +16,103 @@
 
 namespace ffd {
 
-// What an accuracy level collides: a box set, and which nodes of each box it tests.
-struct BoxLevel {
-  const BoxSet* boxes;
-  // Box nodes [first_node, end_node) are tested: 0-7 the corners, 8 the centre of mass.
-  int first_node;
-  int end_node;
-  bool samples;      // also Model::box_samples, the surface nodes (level 3)
-  bool exact;        // level 5: surface vertices against triangles; boxes only pair cells
-  // Levels 4 and 5 under the paper's response, and levels 0-3 with [simulation]
-  // edge_contacts, in a scene with inter-collision: the exact surfaces' edges against the
-  // other object's triangles too (collision.cpp, test_edges), and the planes answered first
-  // (step.cpp). The one place that decides it.
-  bool edges;
-  // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
-  // Model::box_skin ("box_overlap"; 0 when off), at level 4 the larger of it and
-  // Model::sub_box_skin.
-  double skin;
+// The narrow phase's working memory (collision.cpp).
+struct NarrowMemory {
+  // Whether the narrow phase's detection found a node of one box inside the other, per
+  // candidate pair (capacity: that of BroadPhaseMemory::pairs).
+  std::vector<std::uint8_t> pair_hit;
+  double narrow_retested_share = 0.0;  // of the last narrow phase's pairs, those tested again
+  // Answering the pairs over the pool: each pair's wave (one more than the last wave of a
+  // pair sharing an object with it) and its turn among each of its two objects' pairs, the
+  // pairs by wave (wave_pairs[wave_begin[w] .. wave_begin[w + 1])), and per object the next
+  // wave, the next turn to hand out, and the turns answered so far.
+  std::vector<std::uint32_t> pair_wave;
+  std::vector<std::array<std::uint32_t, 2>> pair_turn;
+  std::vector<Index> wave_pairs;
+  std::vector<Index> wave_begin;
+  std::vector<std::uint32_t> object_wave, object_turn, object_answered;
+  std::uint32_t narrow_waves = 0;  // waves of the last narrow phase (0: one thread answered the pairs)
+  // Level 4 under the paper's response: the pairs of cells of two objects among the candidate
+  // pairs of sub-boxes, (lower << 32 | higher), sorted so that each pair is answered once.
+  std::vector<std::uint64_t> cell_pair_keys;  // capacity: that of the pairs
+  // Levels 4 and 5 under the paper's response, and 0-3 with edge contacts: the lattice as
+  // the step found it, before dynamics and responses; which side of a triangle an edge came
+  // from (test_edges).
+  std::vector<Vec3> x_start;
+  // Levels 0-3 with edge contacts, where the planes answer first: a cell resting on a plane
+  // takes none of a push into it (plane_holds), set by step() each step.
+  bool planes_hold = false;
+  // Levels 0-3 with edge contacts: per box, the bounds of the triangles its cell owns
+  // (Model::cell_owned_triangles), swapped in for BoxMemory::box_lo and box_hi while the edge
+  // tests' pairs are found (pair_cells_by_triangles).
+  std::array<std::vector<double>, 3> surface_lo, surface_hi;
+  // Accuracy level 5. Each surface vertex as the lattice is now, mapped a cell at a time
+  // when a step first needs it (a response clears the flags of the cells it moved), and the
+  // AABB of each cell's vertices.
+  std::vector<Vec3> surface_x;                      // (V)
+  std::vector<std::uint8_t> surface_cell_fresh;     // (C)
+  std::vector<Vec3> cell_vertex_min, cell_vertex_max;  // (C)
+  // The AABB of the corners of each cell's triangles, computed at epoch `stamp`; valid while
+  // no cell its corners are bound to has changed since (surface_changed, the epoch of the
+  // last response that moved a cell's vertices). The epoch advances at every step and response.
+  std::vector<Vec3> cell_triangle_min, cell_triangle_max;  // (C)
+  std::vector<std::uint64_t> cell_triangle_stamp;          // (C)
+  std::vector<std::uint64_t> surface_changed;              // (C)
+  std::uint64_t surface_epoch = 0, surface_step_epoch = 0;
+  // Corners of the triangles of one cell, 3 per triangle, and each triangle's AABB by axis.
+  std::vector<Vec3> triangle_corners;
+  std::vector<Vec3> triangle_min, triangle_max;
+  std::array<std::vector<double>, 3> triangle_lo, triangle_hi;
+  std::vector<Index> triangle_near;  // the triangles one vertex may lie within the contact radius of
+  // A thread's share of the narrow phase's answers while pairs are answered in waves: its
+  // counters, and the contacts it found with the smallest keys (pair index, then order within
+  // the pair), at most ContactLog::contacts.size() of them in a max-heap on the key. The
+  // step's list is merged from them in key order: the same list, whichever thread answered
+  // which pair.
+  struct KeyedContact {
+    std::uint64_t key;
+    Contact contact;
+  };
+  struct NarrowWorkspace {
+    StageCounters counters;
+    double max_depth = 0.0;
+    Index retested = 0;
+    std::vector<KeyedContact> contacts;
+    std::uint32_t held = 0;      // contacts[0 .. held) used
+    std::uint32_t recorded = 0;  // contacts found, held or not
+    std::uint32_t merged = 0;    // contacts[0 .. merged) are in the step's list
+  };
+  std::vector<NarrowWorkspace> narrow_workspaces;  // one per thread (attach_pool())
 };
-BoxLevel box_level(const Model& model, Accuracy accuracy);
 
-// Eq. 2 for the 9 nodes of box b of `boxes` from its cell's 8 lattice nodes; marks it valid.
-void update_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b);
-void update_boxes(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch);
+// The contacts of the step, for frames (Scratch::contacts()): every stage that finds one
+// records it; fixed capacity, the excess is counted not stored.
+struct ContactLog {
+  std::vector<Contact> contacts;
+  std::uint32_t contact_count = 0;
+  std::uint32_t contacts_dropped = 0;
+  void record_contact(const Vec3& point, const Vec3& normal, double depth, ContactKind kind) {
+    if (contact_count < contacts.size()) contacts[contact_count++] = {point, normal, depth, kind};
+    else ++contacts_dropped;
+  }
+};
 
-// Box b recomputed if a response made it stale (counted in `counters`).
-void ensure_box(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch, Index b,
-                StageCounters& counters);
-
-// Cells whose nodes moved: their boxes, and those of every cell sharing a node, are stale.
-void invalidate_around(const Model& model, const BoxSet& boxes, Scratch& scratch, Index cell);
+// What the collision stages (boxes, broad phase, narrow phase, planes) and the interaction
+// work in, and the worker threads they spread over (worker_pool.h; none: this thread alone,
+// owned by the caller, never by the memory).
+struct CollisionMemory : BoxMemory, BroadPhaseMemory, NarrowMemory, ContactLog {
+  WorkerPool* pool = nullptr;
+};
 
 // Tested node k of box b at `level`: one of its 9 nodes, or (level 3) a surface node mapped
 // from the lattice as it is now; how many a box has; and k's local coordinates in its cell.
-Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index b, int k);
+Vec3 tested_node(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index b, int k);
 int tested_node_count(const BoxLevel& level);
 const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b, int k);
 
 // Node-in-box detection (eq. 3-7, the face chosen by the way in: box_test.h), the one loop
 // every response and every mover (a box's tested nodes, the probe's) runs: points k in
-// [0, count), point_at(k), against box `container` as Scratch::box_nodes holds it, its
+// [0, count), point_at(k), against box `container` as BoxMemory::box_nodes holds it, its
 // planes grown by `skin` (m), at the points' velocity relative to the box,
 // relative_velocity() (m/s). on_point(k, point, hit, planes) sees every point; it returns
 // true where it answered at once and so moved the box or the points (having made the box
@@ -56,7 +120,7 @@ const Vec3& tested_node_local(const Model& model, const BoxLevel& level, Index b
 // should the box have become degenerate. False if the box is degenerate to begin with (it
 // contains no point; nothing is called).
 template <class PointAt, class RelativeVelocity, class OnPoint>
-bool scan_points_in_box(const Scratch& scratch, Index container, double skin, double recent, int count,
+bool scan_points_in_box(const CollisionMemory& scratch, Index container, double skin, double recent, int count,
                         const PointAt& point_at, const RelativeVelocity& relative_velocity, const OnPoint& on_point) {
   const auto planes_now = [&] {
     BoxPlanes planes = box_planes(scratch.box_nodes[container]);
@@ -79,74 +143,33 @@ bool scan_points_in_box(const Scratch& scratch, Index container, double skin, do
 
 // Whether a tested node of box `mover` lies inside box `container` grown by `margin` (m;
 // 0: inside the box itself). Read-only.
-bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const Scratch& scratch, Index mover,
+bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index mover,
                 Index container, double margin);
 
-// The narrow phase's detection, read-only and over the pool: Scratch::pair_hit[p] for each
+// The narrow phase's detection, read-only and over the pool: NarrowMemory::pair_hit[p] for each
 // candidate pair, whether a tested node of one box lies inside the other grown by `margin`
 // (the paper's response: 0; the solver's: its speculative distance), or both objects sleep
 // (such a pair is looked at when its turn comes). Counts the node tests.
-void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
+void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,
                     StageCounters& counters, double margin);
-
-// Teschner et al. 2003: hash of integer grid coordinates (two's complement wrap for
-// negative ones) into `table_size` buckets. It orders the narrow phase's pairs (broad_phase.cpp).
-inline Index spatial_hash(std::int64_t gx, std::int64_t gy, std::int64_t gz, Index table_size) {
-  const std::uint64_t h = (static_cast<std::uint64_t>(gx) * 73856093ull) ^
-                          (static_cast<std::uint64_t>(gy) * 19349663ull) ^
-                          (static_cast<std::uint64_t>(gz) * 83492791ull);
-  return static_cast<Index>(h % table_size);
-}
-
-// Integer hash-grid coordinate of a world coordinate; saturates far outside +-2^52 cells
-// and maps NaN to 0, so no input is undefined behaviour.
-std::int64_t hash_grid_coordinate(double x, double inv_cell);
-
-// Cells of a broad-phase grid at most (a coarser grid covers a larger region).
-inline constexpr Index kBroadPhaseGridCells = 1 << 18;
-
-// First and last box of `object` in `boxes` (boxes are stored in cell order).
-inline Index first_box(const BoxSet& boxes, const ObjectModel& object) { return boxes.cell_box_begin[object.cell_begin]; }
-inline Index end_box(const BoxSet& boxes, const ObjectModel& object) { return boxes.cell_box_begin[object.cell_end]; }
-
-// The broad phase (broad_phase.cpp): first the boxes' AABBs (from the box update) grown by
-// `margin` and the wake margins, and each object's bounds; then every pair of boxes the
-// narrow phase wants (boxes of different objects, or of one object's cells that share no
-// lattice node, as the effects ask; never two sleepers) whose AABBs overlap, once each,
-// sorted, into scratch.pairs. Returns false when the buffers were too small (pairs are
-// then missing this step; grow_scratch() makes room between steps).
-void grow_box_bounds(const Model& model, const BoxSet& boxes, double margin, Scratch& scratch);
-// What find_pairs looks for: pairs of boxes of different objects (inter), of one object's
-// cells that share no lattice node (self), of one object's cells that do (neighbours: what
-// a general broad phase reports too, for the race against FCL); objects asleep (per object,
-// may be null) pair with nothing but awake objects' boxes.
-struct PairQuery {
-  bool inter = false, self = false, neighbours = false;
-  const std::uint8_t* asleep = nullptr;
-  bool ordered = true;  // in the order the narrow phase answers them (else as found)
-};
-bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query, Scratch& scratch,
-                StageCounters& counters);
-bool find_candidate_pairs(const Model& model, const BoxLevel& level, const State& state, Scratch& scratch,
-                          StageCounters& counters);
 
 // Algorithm 1 over the candidate pairs: the pairs with a node of one box inside the other are
 // found first (read-only, in parallel); then in pair order each is tested again and answered
 // at once, both boxes updated.
 template <bool kFriction>
-void collide_boxes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+void collide_boxes(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, StageCounters& counters,
                    double& max_depth);
 
 // Level 5 over the same pairs: every surface vertex of one cell against the triangles of
 // the other cell; a vertex behind the closest triangle (within Model::surface_contact_radius)
 // gets the same response, with the triangle's normal and the vertex's distance as n and r.
 template <bool kFriction>
-void collide_surfaces(const Model& model, State& state, Scratch& scratch, StageCounters& counters, double& max_depth);
+void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth);
 
 // Static planes: the deepest of a box's tested nodes (level 5: of its cell's surface
 // vertices) below a plane moves the cell out, whole correction on the moving side.
 template <bool kFriction>
-void collide_planes(const Model& model, const BoxLevel& level, State& state, Scratch& scratch, StageCounters& counters,
+void collide_planes(const Model& model, const BoxLevel& level, State& state, CollisionMemory& scratch, StageCounters& counters,
                     double& max_depth);
 
 }  // namespace ffd

@@ -9,6 +9,7 @@
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
 #include "interaction.h"
+#include "step_memory.h"
 #include "sleep.h"
 
 namespace ffd {
@@ -114,7 +115,7 @@ ContactSide probe_point() {
 struct Bodies {
   const Model& model;
   State& state;
-  const Scratch& scratch;
+  const StepMemory& scratch;
 
   Vec3& x(Index n) const { return n == kProbeNode ? state.probe.x : state.x[n]; }
   Vec3& v(Index n) const { return n == kProbeNode ? state.probe.v : state.v[n]; }
@@ -210,7 +211,7 @@ Mat3 anchor_frame(const Bodies& bodies, const BoxSet* boxes, const ContactConstr
 // Appends a contact: side b's point must stay on the outer side (along n) of side a's
 // surface; it is `depth` inside now. `key` names it from step to step (0: never anchored),
 // on face `face` of box `face_box` of `boxes` (kNoIndex: a plane).
-void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
+void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
                  double depth, std::uint64_t key = 0, const BoxSet* boxes = nullptr, Index face_box = kNoIndex,
                  int face = 0) {
   const double dt = bodies.model.settings.dt;
@@ -238,15 +239,15 @@ void add_contact(const Bodies& bodies, Scratch& scratch, const ContactSide& a, c
 
 }  // namespace
 
-void begin_solver_step(const Model& model, State& state, Scratch& scratch) {
+void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.constraint_count = 0;
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
-  predict_dynamics(model, state, scratch);
+  predict_dynamics(model, state, scratch, scratch.pool);
   scratch.grab_force = Vec3::Zero();
 }
 
-void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+void find_box_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                        StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
@@ -298,7 +299,7 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   }
 }
 
-void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                          StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Bodies bodies{model, state, scratch};
@@ -357,7 +358,7 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
   }
 }
 
-void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
+void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, StepMemory& scratch,
                          StageCounters& counters, double& max_depth) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
@@ -431,7 +432,7 @@ enum class ContactPass {
 
 // One pass over the contact list: each contact's non-penetration (an inequality: its
 // correction lambda stays >= 0), then its friction.
-void project_contacts(const Bodies& bodies, Scratch& scratch, double mu, ContactPass pass) {
+void project_contacts(const Bodies& bodies, StepMemory& scratch, double mu, ContactPass pass) {
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     ContactConstraint& c = scratch.constraints[i];
     if (!(c.inv_mass > 0.0)) continue;
@@ -454,7 +455,7 @@ void project_contacts(const Bodies& bodies, Scratch& scratch, double mu, Contact
 // Their normal corrections are held through the friction passes, so the set does not change
 // there; the passes visit these alone (on the teapots at rest, most of the list is
 // speculative contacts that never push).
-void gather_friction_contacts(Scratch& scratch, double mu) {
+void gather_friction_contacts(StepMemory& scratch, double mu) {
   Index count = 0;
   for (Index i = 0; i < scratch.constraint_count && mu > 0.0; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
@@ -465,7 +466,7 @@ void gather_friction_contacts(Scratch& scratch, double mu) {
 }
 
 // One pass over the resting contacts' friction alone, their normal corrections held.
-void project_resting_friction(const Bodies& bodies, Scratch& scratch, double mu) {
+void project_resting_friction(const Bodies& bodies, StepMemory& scratch, double mu) {
   for (Index k = 0; k < scratch.friction_contact_count; ++k)
     project_friction(bodies, scratch.constraints[scratch.friction_contacts[k]], mu);
 }
@@ -474,7 +475,7 @@ void project_resting_friction(const Bodies& bodies, Scratch& scratch, double mu)
 // the point moves by dt times the spring's change of velocity, and the force it gave so far
 // (Scratch::grab_force) enters the next, so that a heavy object hangs from it without the
 // explicit spring's overshoot.
-void project_grab(const Model& model, const Bodies& bodies, Scratch& scratch) {
+void project_grab(const Model& model, const Bodies& bodies, StepMemory& scratch) {
   const GrabState& grab = bodies.state.grab;
   ContactSide side = cell_point(model, grab.cell, grab.local);
   bodies.prepare(side);
@@ -498,7 +499,7 @@ struct SideBody {
   Vec3 v = Vec3::Zero();
   double inv_mass = 0.0;
 };
-SideBody side_body(const Model& model, const State& state, const Scratch& scratch, const ContactSide& s) {
+SideBody side_body(const Model& model, const State& state, const StepMemory& scratch, const ContactSide& s) {
   SideBody body;
   if (s.count == 0) return body;
   if (s.cell == kNoIndex) return {state.probe.v, probe_inv_mass(model, state)};
@@ -523,7 +524,7 @@ void set_side_velocity(const Model& model, State& state, const ContactSide& s, c
 // runs on the same Scratch never match.
 class NodeVisit {
  public:
-  NodeVisit(const Model& model, State& state, Scratch& scratch)
+  NodeVisit(const Model& model, State& state, StepMemory& scratch)
       : model_(model), state_(state), scratch_(scratch), mark_(++scratch.node_stamp_epoch) {}
   // Calls f(velocity, mass) for each node of side s not visited yet in this pass.
   template <class F>
@@ -544,14 +545,14 @@ class NodeVisit {
  private:
   const Model& model_;
   State& state_;
-  Scratch& scratch_;
+  StepMemory& scratch_;
   std::uint64_t mark_;
   bool probe_seen_ = false;
 };
 
 // The kinetic energy (J) of the nodes of the cells in active contacts, and of the probe if it
 // is in one, each counted once.
-double answered_energy(const Model& model, State& state, Scratch& scratch) {
+double answered_energy(const Model& model, State& state, StepMemory& scratch) {
   double energy = 0.0;
   NodeVisit visit(model, state, scratch);
   const auto add = [&energy](const Vec3& v, double m) { energy += 0.5 * m * v.squaredNorm(); };
@@ -568,7 +569,7 @@ double answered_energy(const Model& model, State& state, Scratch& scratch) {
 // velocity pass, leaves along n at its side's share of -(1 - alpha) approach, times `scale`,
 // once whatever the number of contacts its cells are in. Returns the kinetic energy it adds
 // as A scale + B scale^2 (J): {A, B} for scale 1.
-std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch, double scale) {
+std::array<double, 2> rebound(const Model& model, State& state, StepMemory& scratch, double scale) {
   const double alpha = state.params.alpha;
   std::array<double, 2> added{0.0, 0.0};
   NodeVisit visit(model, state, scratch);
@@ -600,7 +601,7 @@ std::array<double, 2> rebound(const Model& model, State& state, Scratch& scratch
 // solve). So alpha and beta mean what they mean in the paper (beta as Coulomb's mu), and a
 // position correction of the solve never leaves as metres per second (v = dx / dt of a
 // millimetre is 1 m/s).
-void answer_velocities(const Model& model, State& state, Scratch& scratch, double beta) {
+void answer_velocities(const Model& model, State& state, StepMemory& scratch, double beta) {
   const bool rebounds = state.params.alpha < 1.0;
   const double energy_before = rebounds ? answered_energy(model, state, scratch) : 0.0;  // J
   for (Index i = 0; i < scratch.constraint_count; ++i) {
@@ -640,7 +641,7 @@ void answer_velocities(const Model& model, State& state, Scratch& scratch, doubl
 }
 
 // The rigid part of an object's motion: centre and its velocity, inertia about it, spin (I^-1 L).
-void measure_motion(const Model& model, const State& state, Index object, Scratch::ObjectMotion& s) {
+void measure_motion(const Model& model, const State& state, Index object, SolverMemory::ObjectMotion& s) {
   const ObjectModel& obj = model.objects[object];
   const Vec3 centre = centre_of_mass(model, state.x, object);
   double mass = 0.0;
@@ -690,11 +691,11 @@ Vec3 never_faster(const Vec3& motion, const Vec3& change) {
 //   its centre's).
 // Neither ever makes the object move or spin faster than it does. Everything is measured
 // before anything changes, so the objects' order does not matter.
-void damp_on_supports(const Model& model, State& state, Scratch& scratch, double beta) {
+void damp_on_supports(const Model& model, State& state, StepMemory& scratch, double beta) {
   const double resistance = beta > 0.0 ? model.settings.rolling_resistance : 0.0, alpha = state.params.alpha;
   if (!(resistance > 0.0) && !(alpha > 0.0)) return;
   const Bodies bodies{model, state, scratch};
-  for (Scratch::ObjectMotion& s : scratch.object_motion) s.touched = false;
+  for (SolverMemory::ObjectMotion& s : scratch.object_motion) s.touched = false;
   auto object_of = [&](const ContactSide& side) -> Index {
     if (side.count == 0 || side.cell == kNoIndex) return kNoIndex;  // a plane, the probe
     const Index o = model.cell_object[side.cell];
@@ -706,7 +707,7 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
     if (!(c.lambda > 0.0)) continue;
     for (const Index o : {object_of(c.a), object_of(c.b)})
       if (o != kNoIndex && !scratch.object_motion[o].touched) {
-        scratch.object_motion[o] = Scratch::ObjectMotion{};
+        scratch.object_motion[o] = SolverMemory::ObjectMotion{};
         measure_motion(model, state, o, scratch.object_motion[o]);
         scratch.object_motion[o].touched = true;
       }
@@ -722,8 +723,8 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
     for (int side = 0; side < 2; ++side) {
       const Index self = side == 0 ? a : b, other = side == 0 ? b : a;
       if (self == kNoIndex) continue;
-      Scratch::ObjectMotion& s = scratch.object_motion[self];
-      const Scratch::ObjectMotion* support = other != kNoIndex ? &scratch.object_motion[other] : nullptr;
+      SolverMemory::ObjectMotion& s = scratch.object_motion[self];
+      const SolverMemory::ObjectMotion* support = other != kNoIndex ? &scratch.object_motion[other] : nullptr;
       s.load += c.lambda;
       s.pivot += c.lambda * where;
       if (support) s.support_spin += c.lambda * support->omega;
@@ -735,7 +736,7 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
   }
   const double dt = model.settings.dt;
   for (std::size_t o = 0; o < scratch.object_motion.size(); ++o) {
-    const Scratch::ObjectMotion& s = scratch.object_motion[o];
+    const SolverMemory::ObjectMotion& s = scratch.object_motion[o];
     if (!s.touched || !(s.load > 0.0)) continue;
     const ObjectModel& obj = model.objects[o];
     // Rolling resistance: the angular impulse that stops the relative spin, capped at
@@ -768,7 +769,7 @@ void damp_on_supports(const Model& model, State& state, Scratch& scratch, double
 
 // The contacts that pushed and stuck keep what their friction held as their anchors for the
 // next step; the others let go (a contact that slid starts again from where it ends the step).
-void keep_anchors(const Model& model, State& state, Scratch& scratch, double mu) {
+void keep_anchors(const Model& model, State& state, StepMemory& scratch, double mu) {
   const Bodies bodies{model, state, scratch};
   const BoxSet* boxes = box_level(model, state.params.accuracy).boxes;
   std::size_t count = 0;
@@ -786,7 +787,7 @@ void keep_anchors(const Model& model, State& state, Scratch& scratch, double mu)
 
 }  // namespace
 
-void solve_contacts(const Model& model, State& state, Scratch& scratch) {
+void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
   const Bodies bodies{model, state, scratch};
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     ContactConstraint& c = scratch.constraints[i];
@@ -800,7 +801,7 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   const int iterations = dynamics_iterations(model);
   const int friction_passes = beta > 0.0 ? kFrictionPasses : 0;
   for (int it = 0; it < iterations; ++it) {
-    sweep_dynamics(model, it, state, scratch);
+    sweep_dynamics(model, it, state, scratch, scratch.pool);
     project_contacts(bodies, scratch, beta, ContactPass::All);  // Coulomb, mu = beta
     if (friction_passes > 0) gather_friction_contacts(scratch, beta);
     for (int pass = 0; pass < friction_passes; ++pass) project_resting_friction(bodies, scratch, beta);
@@ -811,7 +812,7 @@ void solve_contacts(const Model& model, State& state, Scratch& scratch) {
   // the floor (the `probe_force` hard case).
   project_contacts(bodies, scratch, beta, ContactPass::Planes);
   keep_anchors(model, state, scratch, beta);
-  finish_dynamics(model, state, scratch);
+  finish_dynamics(model, state, scratch, scratch.pool);
   const double dt = model.settings.dt;
   if (has(model.settings.effects, Effect::Probe)) {
     ProbeState& probe = state.probe;

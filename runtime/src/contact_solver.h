@@ -18,26 +18,101 @@
 //                 solve's; none where the contact stuck), then a rebound of 1 - alpha of
 //                 its approach, once per node and never adding kinetic energy
 //                 (solve_contacts)
-// The contact list (Scratch::constraints) is the boundary: detection writes it, the solve reads
+// The contact list (SolverMemory::constraints) is the boundary: detection writes it, the solve reads
 // it. Everything runs in list order on one thread but the sweeps (objects over the pool), so
 // the result does not depend on the thread count.
-#include "collision.h"
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "boxes.h"
+#include "ffd/model.h"
+#include "ffd/state.h"
+#include "ffd/step.h"
 
 namespace ffd {
+
+// The response "solver" (contact_solver.h): a contact is a constraint between two points, each
+// carried by lattice nodes through trilinear weights (eq. 2): the point that must stay out
+// (side b: a box node, a surface node, the probe) and a point of the surface it must stay
+// out of (side a: the mean of a box face's four corners, the probe's centre, nothing for a
+// static plane). A node index kProbeNode stands for the probe proxy.
+inline constexpr Index kProbeNode = kNoIndex - 1;
+struct ContactSide {
+  std::array<Index, 8> node;
+  std::array<double, 8> weight;
+  std::array<double, 8> share{};  // 1/kg: weight / mass of each node in this step's solve (0: static)
+  std::uint8_t count = 0;         // node[0 .. count) carry the point
+  Index cell = kNoIndex;          // the lattice cell whose 8 nodes these are (none: the probe, a plane)
+};
+struct ContactConstraint {
+  ContactSide a, b;
+  Vec3 normal = Vec3::Zero();    // unit, from side a's surface towards the outside
+  double rest = 0.0;             // C = normal . (p_b - p_a) - rest >= 0 (m)
+  std::uint64_t key = 0;         // which contact, from step to step (0: none, never anchored)
+  Vec3 hold = Vec3::Zero();      // m: friction holds p_b - p_a here, tangentially: its anchor,
+                                 // or where the step began
+  Index face_box = kNoIndex;     // side a's box and face, whose frame where the step began its
+  std::uint8_t face = 0;         // anchor is kept in (kNoIndex: a plane's, the world's)
+  double approach = 0.0;         // normal . (v_b - v_a) when found, m/s (< 0: approaching)
+  double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
+  double lambda = 0.0;           // normal correction so far this step, m (>= 0)
+  Vec3 friction = Vec3::Zero();  // tangential correction so far this step, m
+  bool lodged = false;           // found deeper than a step's approach: pushed out without friction
+};
+
+// The response "solver"'s working memory: the step's contacts as constraints (the list the
+// detection writes and the solve reads; capacity grown between steps), the objects this step
+// solves (awake at its start), the probe's start of step and its device's velocity, and the
+// force the grab has given so far this step (N).
+struct SolverMemory {
+  std::vector<ContactConstraint> constraints;
+  Index constraint_count = 0;
+  std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
+  std::vector<Index> friction_contacts;     // the resting contacts the friction passes revisit
+  Index friction_contact_count = 0;
+  bool constraints_dropped = false;
+  std::vector<std::uint8_t> object_solving;
+  Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
+  Vec3 grab_force = Vec3::Zero();
+  // Rolling resistance and support damping: per object, its rigid motion this step and what
+  // its active contacts carry.
+  struct ObjectMotion {
+    Vec3 centre = Vec3::Zero();       // m
+    Vec3 omega = Vec3::Zero();        // rad/s, the best rigid spin of its nodes
+    Mat3 inertia = Mat3::Zero();      // kg m^2 about the centre
+    double mass = 0.0;                // kg
+    double load = 0.0;                // sum of its active contacts' normal corrections (kg m)
+    Vec3 support_spin = Vec3::Zero(); // their partners' spins weighted by load
+    Vec3 pivot = Vec3::Zero();        // their points weighted by load
+    Vec3 velocity = Vec3::Zero();     // m/s, of the centre
+    Vec3 up = Vec3::Zero();           // resting contacts' normals towards it, weighted by load
+    Vec3 support_velocity = Vec3::Zero();  // their partners' centre velocities weighted by load
+    double resting_load = 0.0;        // the share of load from resting contacts (kg m)
+    bool touched = false;
+  };
+  std::vector<ObjectMotion> object_motion;
+  // Marks the nodes a pass over the contacts has visited; each pass takes a new mark
+  // (++node_stamp_epoch), so that a node shared by several contacts' cells is visited once,
+  // whatever earlier passes left.
+  std::vector<std::uint64_t> node_stamp;
+  std::uint64_t node_stamp_epoch = 0;
+};
+
 
 // How far outside a box face (m) a node still gets a contact: a speculative one, inactive
 // unless the solve would move the node in. The broad phase grows the boxes by as much.
 extern const double kSpeculativeDistance;
 
-void begin_solver_step(const Model& model, State& state, Scratch& scratch);
+void begin_solver_step(const Model& model, State& state, StepMemory& memory);
 
-void find_box_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+void find_box_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                        StageCounters& counters, double& max_depth);
-void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, Scratch& scratch,
+void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                          StageCounters& counters, double& max_depth);
-void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch,
+void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, StepMemory& memory,
                          StageCounters& counters, double& max_depth);
 
-void solve_contacts(const Model& model, State& state, Scratch& scratch);
+void solve_contacts(const Model& model, State& state, StepMemory& memory);
 
 }  // namespace ffd

@@ -4,7 +4,9 @@
 #include "kernels/spring_kernels.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace ffd {
 
@@ -83,7 +85,7 @@ Vec3 cell_centre(const Model& model, const State& state, Index cell) {
 // Each cell's rotation for the step's sweeps, fitted to the predicted positions: the sweeps
 // move the nodes little beside the prediction, and fitting once a step instead of once a
 // projection costs a fraction of the time (docs/notes/2026-11-28-code-findings.md#corotated-cells).
-void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
   for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) {
     const std::array<Index, 8>& node = model.cell_nodes[cell];
     const Vec3& rest_centre = model.cell_rest_centre[cell];
@@ -91,7 +93,7 @@ void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state
     Mat3 A = Mat3::Zero();
     for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
     fit_rotation(A, state.cell_rotation[cell], 2);  // warm-started from the last step
-    scratch.cell_rotation_matrix[cell] = state.cell_rotation[cell].matrix();
+    memory.cell_rotation_matrix[cell] = state.cell_rotation[cell].matrix();
   }
 }
 
@@ -135,19 +137,19 @@ void project_cell_shape(const Model& model, Index cell, const Mat3& R, double al
 // "solver" response puts the contacts' projections between the sweeps.
 // The kernel's view of one object's springs at `stiffness`: XPBD's alpha~ = 1 / (k dt^2) and
 // the damping term gamma = c / (k dt).
-SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, State& state, Scratch& scratch) {
+SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, State& state, DynamicsMemory& memory) {
   const double dt = model.settings.dt;
   const double compliance = 1.0 / stiffness;            // m/N
   const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
   const double gamma = compliance * obj.mass_spring.damping / dt;  // XPBD damping term
   return SpringSolve{state.x.data()->data(),
-                     scratch.x_prev.data()->data(),
+                     memory.x_prev.data()->data(),
                      model.node_inv_mass.data(),
                      model.spring_node_a.data(),
                      model.spring_node_b.data(),
                      model.spring_rest_length.data(),
-                     scratch.lambda.data(),
-                     scratch.spring_inv_denominator.data(),
+                     memory.lambda.data(),
+                     memory.spring_inv_denominator.data(),
                      alpha_tilde,
                      gamma};
 }
@@ -155,75 +157,75 @@ SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stif
 // x_prev = x, the prediction x += dt v, the multipliers reset, the denominators for the
 // object's live stiffness.
 SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                                Scratch& scratch) {
+                                DynamicsMemory& memory) {
   const double dt = model.settings.dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
-    scratch.x_prev[n] = state.x[n];
+    memory.x_prev[n] = state.x[n];
     state.x[n] += dt * state.v[n];  // prediction
   }
-  const SpringSolve solve = spring_solve(model, obj, stiffness, state, scratch);
+  const SpringSolve solve = spring_solve(model, obj, stiffness, state, memory);
   const std::size_t object = &obj - model.objects.data();
-  if (scratch.denominator_stiffness[object] != stiffness) {
+  if (memory.denominator_stiffness[object] != stiffness) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
       const Spring& spring = model.springs[s];
       const double w = model.node_inv_mass[spring.a] + model.node_inv_mass[spring.b];
-      scratch.spring_inv_denominator[s] = 1.0 / ((1.0 + solve.gamma) * w + solve.alpha_tilde);
+      memory.spring_inv_denominator[s] = 1.0 / ((1.0 + solve.gamma) * w + solve.alpha_tilde);
     }
-    scratch.denominator_stiffness[object] = stiffness;
+    memory.denominator_stiffness[object] = stiffness;
   }
-  for (Index s = obj.spring_begin; s < obj.spring_end; ++s) scratch.lambda[s] = 0.0;
-  for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) scratch.tetrahedron_lambda[t] = 0.0;
+  for (Index s = obj.spring_begin; s < obj.spring_end; ++s) memory.lambda[s] = 0.0;
+  for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) memory.tetrahedron_lambda[t] = 0.0;
   if (obj.mass_spring.shape_stiffness > 0.0) {
-    for (Index c = obj.cell_begin; c < obj.cell_end; ++c) scratch.cell_shape_lambda[c] = 0.0;
-    fit_cell_rotations(model, obj, state, scratch);
+    for (Index c = obj.cell_begin; c < obj.cell_end; ++c) memory.cell_shape_lambda[c] = 0.0;
+    fit_cell_rotations(model, obj, state, memory);
   }
   return solve;
 }
 
 // One Gauss-Seidel sweep over the object's springs, colour by colour, then its volumes.
 void sweep_mass_spring(const Model& model, const ObjectModel& obj, const SpringSolve& solve, State& state,
-                       Scratch& scratch) {
+                       DynamicsMemory& memory) {
   const double dt = model.settings.dt;
   for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
     const SpringColour& colour = model.spring_colours[c];
     project_springs(solve, colour.begin, colour.end, colour.independent);
   }
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
-    project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), scratch.tetrahedron_lambda[t], state);
+    project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), memory.tetrahedron_lambda[t], state);
   if (obj.mass_spring.shape_stiffness > 0.0) {
     const double alpha_tilde = 1.0 / (obj.mass_spring.shape_stiffness * dt * dt);  // XPBD: compliance / dt^2
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
-      project_cell_shape(model, c, scratch.cell_rotation_matrix[c], alpha_tilde, scratch.cell_shape_lambda[c], state);
+      project_cell_shape(model, c, memory.cell_rotation_matrix[c], alpha_tilde, memory.cell_shape_lambda[c], state);
   }
 }
 
-void finish_mass_spring(const Model& model, const ObjectModel& obj, State& state, Scratch& scratch) {
+void finish_mass_spring(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
   const double inv_dt = 1.0 / model.settings.dt;
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
   // The force each constraint applied this step, elastic and damping (XPBD: lambda / dt^2), N.
-  for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = scratch.lambda[s] * inv_dt * inv_dt;
+  for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = memory.lambda[s] * inv_dt * inv_dt;
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
-    state.volume_pressure[t] = scratch.tetrahedron_lambda[t] * inv_dt * inv_dt;
+    state.volume_pressure[t] = memory.tetrahedron_lambda[t] * inv_dt * inv_dt;
   if (obj.mass_spring.shape_stiffness > 0.0)
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
-      state.cell_shape_force[c] = scratch.cell_shape_lambda[c] * inv_dt * inv_dt;
+      state.cell_shape_force[c] = memory.cell_shape_lambda[c] * inv_dt * inv_dt;
 }
 
 void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                           Scratch& scratch) {
-  const SpringSolve solve = predict_mass_spring(model, obj, stiffness, state, scratch);
-  for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_mass_spring(model, obj, solve, state, scratch);
-  finish_mass_spring(model, obj, state, scratch);
+                           DynamicsMemory& memory) {
+  const SpringSolve solve = predict_mass_spring(model, obj, stiffness, state, memory);
+  for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_mass_spring(model, obj, solve, state, memory);
+  finish_mass_spring(model, obj, state, memory);
 }
 
 // Lattice shape matching (Rivers & James 2007, FastLSM, with Mueller et al. 2005
 // integration): each region's best rigid fit of its rest shape gives goal positions; a node
 // is pulled towards the mean of its regions' goals by a fraction `stiffness` per step.
 void integrate_shape_matching(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                              Scratch& scratch) {
+                              DynamicsMemory& memory) {
   const double dt = model.settings.dt;
   const ShapeMatchingParams& p = obj.shape_matching;
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) scratch.goal_sum[n] = Vec3::Zero();
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) memory.goal_sum[n] = Vec3::Zero();
   for (Index r = obj.region_begin; r < obj.region_end; ++r) {
     const Region& region = model.regions[r];
     Vec3 c = Vec3::Zero();
@@ -241,13 +243,13 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
     const Mat3 R = state.region_rotation[r].matrix();
     for (Index m = region.member_begin; m < region.member_end; ++m) {
       const Index n = model.region_members[m];
-      scratch.goal_sum[n] += R * (model.node_rest[n] - region.rest_centroid) + c;
+      memory.goal_sum[n] += R * (model.node_rest[n] - region.rest_centroid) + c;
     }
   }
   const double pull = stiffness / dt;
   const double keep = std::max(0.0, 1.0 - p.damping * dt);
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
-    const Vec3 goal = scratch.goal_sum[n] / static_cast<double>(model.node_region_count[n]);
+    const Vec3 goal = memory.goal_sum[n] / static_cast<double>(model.node_region_count[n]);
     state.v[n] = keep * (state.v[n] + pull * (goal - state.x[n]));
     state.x[n] += dt * state.v[n];
   }
@@ -255,41 +257,71 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
 
 }  // namespace
 
-void integrate_dynamics(const Model& model, State& state, Scratch& scratch) {
+void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
+  memory.x_prev.resize(model.node_count());
+  memory.lambda.resize(model.springs.size());
+  memory.tetrahedron_lambda.resize(model.tetrahedra.size());
+  memory.cell_shape_lambda.resize(model.cell_count());
+  memory.cell_rotation_matrix.resize(model.cell_count());
+  memory.spring_inv_denominator.resize(model.springs.size());
+  memory.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
+  memory.object_work.resize(model.objects.size());
+  for (std::size_t i = 0; i < model.objects.size(); ++i) {
+    const ObjectModel& o = model.objects[i];
+    if (o.dynamics == DynamicsKind::MassSpring) {
+      double projections = static_cast<double>(o.spring_end - o.spring_begin);
+      // A cell's shape projection costs about 8 springs' (its rotation, its 8 nodes).
+      if (o.mass_spring.shape_stiffness > 0.0) projections += 8.0 * (o.cell_end - o.cell_begin);
+      memory.object_work[i] = projections * o.mass_spring.iterations;
+    } else {
+      memory.object_work[i] = o.region_begin == o.region_end ? 0.0
+                                                        : static_cast<double>(model.regions[o.region_end - 1].member_end -
+                                                                              model.regions[o.region_begin].member_begin);
+    }
+  }
+  memory.objects_by_work.resize(model.objects.size());
+  std::iota(memory.objects_by_work.begin(), memory.objects_by_work.end(), Index{0});
+  std::stable_sort(memory.objects_by_work.begin(), memory.objects_by_work.end(),
+                   [&](Index a, Index b) { return memory.object_work[a] > memory.object_work[b]; });
+  memory.object_tasks.resize(model.objects.size());
+  memory.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
+}
+
+void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   // Objects are independent: one task each, the largest first, spread over the pool. Each
   // object's result is the same whichever thread solves it.
   Index tasks = 0;
-  for (Index i : scratch.objects_by_work)
-    if (!state.asleep[i]) scratch.object_tasks[tasks++] = i;  // an object asleep is frozen (sleep.h)
+  for (Index i : memory.objects_by_work)
+    if (!state.asleep[i]) memory.object_tasks[tasks++] = i;  // an object asleep is frozen (sleep.h)
   auto integrate = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = scratch.object_tasks[task];
+    const Index i = memory.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     const double stiffness = state.params.stiffness[i];
-    if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, scratch);
-    else integrate_shape_matching(model, obj, stiffness, state, scratch);
+    if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, memory);
+    else integrate_shape_matching(model, obj, stiffness, state, memory);
   };
-  parallel_for(scratch.pool, tasks, integrate);
+  parallel_for(pool, tasks, integrate);
 }
 
 // The "solver" response's share of the dynamics (contact_solver.cpp runs the step around it).
 // Every object's prediction; a shape-matching object takes its whole step here (it has no
 // sweeps), its start kept in x_prev so that finish_dynamics gives it its contacts' velocity.
-void predict_dynamics(const Model& model, State& state, Scratch& scratch) {
+void predict_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   Index tasks = 0;
-  for (Index i : scratch.objects_by_work)
-    if (!state.asleep[i]) scratch.object_tasks[tasks++] = i;
-  scratch.object_task_count = tasks;
+  for (Index i : memory.objects_by_work)
+    if (!state.asleep[i]) memory.object_tasks[tasks++] = i;
+  memory.object_task_count = tasks;
   auto predict = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = scratch.object_tasks[task];
+    const Index i = memory.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     if (obj.dynamics == DynamicsKind::MassSpring) {
-      predict_mass_spring(model, obj, state.params.stiffness[i], state, scratch);
+      predict_mass_spring(model, obj, state.params.stiffness[i], state, memory);
       return;
     }
-    for (Index n = obj.node_begin; n < obj.node_end; ++n) scratch.x_prev[n] = state.x[n];
-    integrate_shape_matching(model, obj, state.params.stiffness[i], state, scratch);
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) memory.x_prev[n] = state.x[n];
+    integrate_shape_matching(model, obj, state.params.stiffness[i], state, memory);
   };
-  parallel_for(scratch.pool, tasks, predict);
+  parallel_for(pool, tasks, predict);
 }
 
 int dynamics_iterations(const Model& model) {
@@ -299,28 +331,28 @@ int dynamics_iterations(const Model& model) {
   return iterations;
 }
 
-void sweep_dynamics(const Model& model, int iteration, State& state, Scratch& scratch) {
+void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   auto sweep = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = scratch.object_tasks[task];
+    const Index i = memory.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     if (obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations)
-      sweep_mass_spring(model, obj, spring_solve(model, obj, state.params.stiffness[i], state, scratch), state, scratch);
+      sweep_mass_spring(model, obj, spring_solve(model, obj, state.params.stiffness[i], state, memory), state, memory);
   };
-  parallel_for(scratch.pool, scratch.object_task_count, sweep);
+  parallel_for(pool, memory.object_task_count, sweep);
 }
 
-void finish_dynamics(const Model& model, State& state, Scratch& scratch) {
+void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   auto finish = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = scratch.object_tasks[task];
+    const Index i = memory.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     if (obj.dynamics == DynamicsKind::MassSpring) {
-      finish_mass_spring(model, obj, state, scratch);
+      finish_mass_spring(model, obj, state, memory);
       return;
     }
     const double inv_dt = 1.0 / model.settings.dt;
-    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - scratch.x_prev[n]) * inv_dt;
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
   };
-  parallel_for(scratch.pool, scratch.object_task_count, finish);
+  parallel_for(pool, memory.object_task_count, finish);
 }
 
 }  // namespace ffd

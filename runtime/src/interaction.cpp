@@ -38,7 +38,7 @@ void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3
 
 // The probe against box b both ways: its 27 nodes in the box (node-in-box, eq. 3-7), and
 // the box's 9 nodes in the probe's sphere.
-void probe_against_box(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, Index b, double beta,
+void probe_against_box(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, Index b, double beta,
                        StageCounters& counters, double& max_depth) {
   const double radius = model.settings.probe.radius;
   const Index cell = boxes.box_cell[b];
@@ -106,7 +106,7 @@ namespace {
 
 // Virtual coupling (Colgate et al. 1995) integrated by backward Euler, so any stiffness and
 // damping are stable at the fixed step; then contacts; then the force the device renders.
-void step_probe(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+void step_probe(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, StageCounters& counters,
                 double& max_depth) {
   const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
@@ -147,7 +147,7 @@ void step_grab(const Model& model, State& state) {
 
 }  // namespace
 
-void interact(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+void interact(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, StageCounters& counters,
               double& max_depth) {
   if (has(model.settings.effects, Effect::Probe)) step_probe(model, boxes, state, scratch, counters, max_depth);
   if (has(model.settings.effects, Effect::Grab) && state.grab.active) step_grab(model, state);

@@ -3,12 +3,12 @@
 // and the grab spring. Runs after the collision stages so that what a user does acts on the
 // step's final positions, and the force output is that of the finished step.
 #include "ffd/model.h"
-#include "ffd/step.h"
+#include "collision.h"
 
 namespace ffd {
 
 // `boxes`: the box set of the accuracy level (the FFD AABBs at level 5).
-void interact(const Model& model, const BoxSet& boxes, State& state, Scratch& scratch, StageCounters& counters,
+void interact(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, StageCounters& counters,
               double& max_depth);
 
 // The probe's virtual coupling (Colgate et al. 1995) by backward Euler, so any stiffness and

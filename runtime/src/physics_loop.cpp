@@ -13,7 +13,7 @@
 #include <concurrentqueue/concurrentqueue.h>
 #include <readerwriterqueue/readerwriterqueue.h>
 
-#include "collision.h"
+#include "step_memory.h"
 #include "ffd/measure.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
@@ -201,9 +201,10 @@ void PhysicsLoop::Impl::publish_frame() {
   // refreshed so the frame shows the step's final lattice.
   if (!options.frame_boxes) {
   } else if (box_level(model, state.params.accuracy).boxes == &model.boxes) {
+    BoxMemory& boxes = scratch.memory();
     for (Index b = 0; b < model.box_count(); ++b)
-      if (!scratch.box_valid[b]) update_box(model, model.boxes, state, scratch, b);
-    std::copy(scratch.box_nodes.begin(), scratch.box_nodes.begin() + model.box_count(), f.boxes.begin());
+      if (!boxes.box_valid[b]) update_box(model, model.boxes, state, boxes, b);
+    std::copy(boxes.box_nodes.begin(), boxes.box_nodes.begin() + model.box_count(), f.boxes.begin());
   } else {
     for (Index b = 0; b < model.box_count(); ++b) {
       const std::array<Index, 8>& corner = model.cell_nodes[model.boxes.box_cell[b]];
@@ -212,8 +213,9 @@ void PhysicsLoop::Impl::publish_frame() {
     }
   }
   std::copy(state.asleep.begin(), state.asleep.end(), f.asleep.begin());
-  f.contact_count = scratch.contact_count;
-  std::copy(scratch.contacts.begin(), scratch.contacts.begin() + scratch.contact_count, f.contacts.begin());
+  const std::span<const Contact> contacts = scratch.contacts();
+  f.contact_count = static_cast<std::uint32_t>(contacts.size());
+  std::copy(contacts.begin(), contacts.end(), f.contacts.begin());
   f.probe = state.probe;
   f.grab = state.grab;
   f.alpha = state.params.alpha;

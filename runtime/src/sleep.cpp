@@ -17,11 +17,11 @@ void meet(State& state, Index object_a, Index object_b) {
   if (state.asleep[object_b] && state.moving[object_a]) wake(state, object_b);
 }
 
-void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch) {
+void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, BoxMemory& memory) {
   const double reach = 2.0 * model.settings.sleep_radius;
   for (Index b = 0; b < boxes.size(); ++b) {
     const Index o = model.cell_object[boxes.box_cell[b]];
-    scratch.box_wake_margin[b] = state.moving[o] ? reach : 0.0;
+    memory.box_wake_margin[b] = state.moving[o] ? reach : 0.0;
   }
 }
 

@@ -13,7 +13,7 @@
 // command changes its physics. Slower motion meets a sleeper as a static body.
 #include "ffd/model.h"
 #include "ffd/state.h"
-#include "ffd/step.h"
+#include "boxes.h"
 
 namespace ffd {
 
@@ -22,7 +22,7 @@ inline bool sleeping(const Model& model) { return has(model.settings.effects, Ef
 // Before the broad phase: the boxes of an object moving (State::moving) reach 2 sleep_radius
 // further in the hash, so that it meets, and wakes, a sleeper it is about to touch or has
 // just left.
-void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, Scratch& scratch);
+void set_wake_margins(const Model& model, const BoxSet& boxes, const State& state, BoxMemory& memory);
 
 // Wakes `object`. It counts as still, not as moving, so waking alone does not spread: only
 // motion of its centre of mass beyond sleep_radius wakes what it touches.

@@ -1,26 +1,19 @@
 // One fixed step: the stages of the Model's pipeline, timed and counted. No allocation, no
-// locking, no I/O, no logging in here: every buffer comes from Scratch.
+// locking, no I/O, no logging in here: every buffer comes from the Scratch's StepMemory.
 #include "ffd/step.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <numeric>
 
-#include "dynamics.h"
 #include "ffd/worker_pool.h"
-#include "collision.h"
-#include "contact_solver.h"
 #include "interaction.h"
 #include "sleep.h"
+#include "step_memory.h"
 
 namespace ffd {
 
 namespace {
-
-std::size_t largest_box_set(const Model& model) {
-  return std::max({model.boxes.size(), model.grid_boxes.size(), model.sub_boxes.size()});
-}
 
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
@@ -47,95 +40,31 @@ bool all_finite(const State& state) {
 
 namespace {
 
-void make_workspace(const Model& model, Scratch::PairWorkspace& w) {
-  const std::size_t boxes = largest_box_set(model);
-  w.box_list_a.resize(boxes);
-  w.box_list_b.resize(boxes);
-  w.box_range.resize(boxes);
-  w.grid_begin.resize(kBroadPhaseGridCells + 1);
-  w.grid_cursor.resize(kBroadPhaseGridCells + 1);
-  w.grid_entries.resize(8 * boxes + 64);
-  for (std::vector<int>& c : w.cell_lattice) c.resize(boxes);
-  w.cell_far.resize(boxes);
-  w.pairs.resize(8 * boxes + 64);
+// Room to answer every pair in waves (with a pool only: one thread answers them in order),
+// and to mark each pair's detection, for as many pairs as the broad phase holds.
+void size_pair_answers(StepMemory& memory) {
+  const std::size_t pairs = memory.pairs.size();
+  memory.pair_hit.resize(pairs);
+  memory.cell_pair_keys.resize(pairs);
+  if (!memory.pool || memory.pool->threads() < 2) return;
+  memory.pair_wave.resize(pairs);
+  memory.pair_turn.resize(pairs);
+  memory.wave_pairs.resize(pairs);
+  memory.wave_begin.resize(pairs + 1);
 }
 
-// Room to answer every pair in waves (with a pool only: one thread answers them in order).
-void size_waves(Scratch& scratch) {
-  if (!scratch.pool || scratch.pool->threads() < 2) return;
-  scratch.pair_wave.resize(scratch.pairs.size());
-  scratch.pair_turn.resize(scratch.pairs.size());
-  scratch.wave_pairs.resize(scratch.pairs.size());
-  scratch.wave_begin.resize(scratch.pairs.size() + 1);
-}
-
-}  // namespace
-
-Scratch make_scratch(const Model& model) {
-  Scratch s;
-  // Room for the largest box set of any accuracy level (level 4 has several boxes a cell).
+void size_narrow_memory(const Model& model, NarrowMemory& s) {
   const std::size_t boxes = largest_box_set(model);
-  s.box_nodes.resize(boxes);
-  s.box_valid.assign(boxes, 0);
-  s.box_moved.assign(boxes, 0);
   for (int axis = 0; axis < 3; ++axis) {
-    s.box_lo[axis].resize(boxes);
-    s.box_hi[axis].resize(boxes);
     s.surface_lo[axis].resize(boxes);
     s.surface_hi[axis].resize(boxes);
   }
-  if (sleeping(model)) s.box_wake_margin.assign(boxes, 0.0);
   if (model.collides) {
-    s.object_lo.resize(model.objects.size());
-    s.object_hi.resize(model.objects.size());
-    s.object_order.resize(model.objects.size());
-    s.pair_tasks.resize(32 * model.objects.size() + 64);
-    s.pair_workspaces.resize(1);
-    make_workspace(model, s.pair_workspaces[0]);
-    s.pairs.resize(8 * boxes + 64);
-    s.pair_hit.resize(s.pairs.size());
-    s.pair_keys.resize(s.pairs.size());
-    s.pair_sorted_keys.resize(s.pairs.size());
-    s.cell_pair_keys.resize(s.pairs.size());
     s.object_wave.resize(model.objects.size());
     s.object_turn.resize(model.objects.size());
     s.object_answered.resize(model.objects.size());
   }
-  s.x_prev.resize(model.node_count());
   s.x_start.assign(model.node_count(), Vec3::Zero());  // (Eigen leaves a resized Vec3 unset)
-  s.node_stamp.assign(model.node_count(), 0);
-  s.lambda.resize(model.springs.size());
-  s.tetrahedron_lambda.resize(model.tetrahedra.size());
-  s.cell_shape_lambda.resize(model.cell_count());
-  s.cell_rotation_matrix.resize(model.cell_count());
-  s.spring_inv_denominator.resize(model.springs.size());
-  s.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
-  s.object_work.resize(model.objects.size());
-  for (std::size_t i = 0; i < model.objects.size(); ++i) {
-    const ObjectModel& o = model.objects[i];
-    if (o.dynamics == DynamicsKind::MassSpring) {
-      double projections = static_cast<double>(o.spring_end - o.spring_begin);
-      // A cell's shape projection costs about 8 springs' (its rotation, its 8 nodes).
-      if (o.mass_spring.shape_stiffness > 0.0) projections += 8.0 * (o.cell_end - o.cell_begin);
-      s.object_work[i] = projections * o.mass_spring.iterations;
-    } else {
-      s.object_work[i] = o.region_begin == o.region_end ? 0.0
-                                                        : static_cast<double>(model.regions[o.region_end - 1].member_end -
-                                                                              model.regions[o.region_begin].member_begin);
-    }
-  }
-  s.objects_by_work.resize(model.objects.size());
-  std::iota(s.objects_by_work.begin(), s.objects_by_work.end(), Index{0});
-  std::stable_sort(s.objects_by_work.begin(), s.objects_by_work.end(),
-                   [&](Index a, Index b) { return s.object_work[a] > s.object_work[b]; });
-  s.object_tasks.resize(model.objects.size());
-  s.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
-  s.contacts.resize(kContactCapacity);
-  s.constraints.resize(std::max<std::size_t>(4096, 4 * boxes));
-  s.next_anchors.resize(s.constraints.size());
-  s.friction_contacts.resize(s.constraints.size());
-  s.object_solving.assign(model.objects.size(), 0);
-  s.object_motion.resize(model.objects.size());
   std::size_t most_triangles = 0;
   for (Index c = 0; c + 1 < model.cell_triangle_begin.size(); ++c)
     most_triangles = std::max<std::size_t>(most_triangles, model.cell_triangle_begin[c + 1] - model.cell_triangle_begin[c]);
@@ -158,58 +87,75 @@ Scratch make_scratch(const Model& model) {
   s.cell_triangle_max.resize(model.cell_count());
   s.cell_triangle_stamp.assign(model.cell_count(), 0);
   s.surface_changed.assign(model.cell_count(), 0);
-  return s;
+}
+
+void size_solver_memory(const Model& model, SolverMemory& s) {
+  s.constraints.resize(std::max<std::size_t>(4096, 4 * largest_box_set(model)));
+  s.next_anchors.resize(s.constraints.size());
+  s.friction_contacts.resize(s.constraints.size());
+  s.object_solving.assign(model.objects.size(), 0);
+  s.object_motion.resize(model.objects.size());
+  s.node_stamp.assign(model.node_count(), 0);
+}
+
+}  // namespace
+
+Scratch::Scratch() = default;
+Scratch::Scratch(std::unique_ptr<StepMemory> memory) : memory_(std::move(memory)) {}
+Scratch::Scratch(Scratch&&) noexcept = default;
+Scratch& Scratch::operator=(Scratch&&) noexcept = default;
+Scratch::~Scratch() = default;
+
+std::span<const Contact> Scratch::contacts() const {
+  return {memory_->contacts.data(), memory_->contact_count};
+}
+
+std::span<const std::array<Vec3, 9>> Scratch::box_nodes() const { return memory_->box_nodes; }
+
+Scratch make_scratch(const Model& model) {
+  auto memory = std::make_unique<StepMemory>();
+  // Room for the largest box set of any accuracy level (level 4 has several boxes a cell).
+  size_box_memory(model, *memory);
+  size_broad_phase_memory(model, *memory, 1);
+  size_narrow_memory(model, *memory);
+  size_pair_answers(*memory);
+  memory->contacts.resize(kContactCapacity);
+  size_dynamics_memory(model, *memory);
+  size_solver_memory(model, *memory);
+  return Scratch(std::move(memory));
 }
 
 void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
-  scratch.pool = &pool;
+  StepMemory& memory = scratch.memory();
+  memory.pool = &pool;
   if (!model.collides) return;
   const std::size_t threads = static_cast<std::size_t>(pool.threads());
-  while (scratch.pair_workspaces.size() < threads) {
-    scratch.pair_workspaces.emplace_back();
-    make_workspace(model, scratch.pair_workspaces.back());
-    // As much room as the first workspace has grown to.
-    scratch.pair_workspaces.back().grid_entries.resize(scratch.pair_workspaces[0].grid_entries.size());
-    scratch.pair_workspaces.back().pairs.resize(scratch.pair_workspaces[0].pairs.size());
-  }
-  scratch.narrow_workspaces.resize(threads);
-  for (Scratch::NarrowWorkspace& w : scratch.narrow_workspaces) w.contacts.resize(scratch.contacts.size());
-  size_waves(scratch);
+  size_broad_phase_memory(model, memory, threads);
+  memory.narrow_workspaces.resize(threads);
+  for (NarrowMemory::NarrowWorkspace& w : memory.narrow_workspaces) w.contacts.resize(memory.contacts.size());
+  size_pair_answers(memory);
 }
 
 void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) {
+  StepMemory& memory = scratch.memory();
   // Contact constraints: twice the room, up to 64 per box of the largest set.
-  if (last.constraints_overflow && scratch.constraints.size() < 64 * largest_box_set(model) + 4096) {
-    scratch.constraints.resize(2 * scratch.constraints.size());
-    scratch.next_anchors.resize(scratch.constraints.size());
-    scratch.friction_contacts.resize(scratch.constraints.size());
+  if (last.constraints_overflow && memory.constraints.size() < 64 * largest_box_set(model) + 4096) {
+    memory.constraints.resize(2 * memory.constraints.size());
+    memory.next_anchors.resize(memory.constraints.size());
+    memory.friction_contacts.resize(memory.constraints.size());
   }
   if (!last.hash_overflow || !model.collides) return;
-  // Boxes stretched over hundreds of grid cells, or millions of pairs, mean a blown-up scene,
-  // not a large one: stop growing there and keep reporting the overflow.
-  const std::size_t boxes = largest_box_set(model);
-  const std::size_t entry_limit = 512 * (8 * boxes + 64), pair_limit = 256 * (4 * boxes + 64);
-  auto grow = [](auto& v, std::size_t limit) {
-    if (v.size() < limit) v.resize(std::min(limit, 2 * v.size()));
-  };
-  for (Scratch::PairWorkspace& w : scratch.pair_workspaces) {
-    grow(w.grid_entries, entry_limit);
-    grow(w.pairs, pair_limit);
-  }
-  grow(scratch.pair_tasks, 256 * (32 * model.objects.size() + 64));
-  grow(scratch.pairs, pair_limit);
-  scratch.pair_hit.resize(scratch.pairs.size());
-  scratch.pair_keys.resize(scratch.pairs.size());
-  scratch.pair_sorted_keys.resize(scratch.pairs.size());
-  scratch.cell_pair_keys.resize(scratch.pairs.size());
-  size_waves(scratch);
+  grow_broad_phase_memory(model, memory);
+  size_pair_answers(memory);
 }
 
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch) {
-  update_boxes(model, *box_level(model, state.params.accuracy).boxes, state, scratch);
+  StepMemory& memory = scratch.memory();
+  update_boxes(model, *box_level(model, state.params.accuracy).boxes, state, memory, memory.pool);
 }
 
-void step(const Model& model, State& state, Scratch& scratch, StepReport& report) {
+void step(const Model& model, State& state, Scratch& whole, StepReport& report) {
+  StepMemory& scratch = whole.memory();
   report = StepReport{};
   report.step = state.step;
   report.stage_ns.fill(-1);
@@ -257,10 +203,10 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
       case Stage::Gravity: apply_gravity(model, state); break;
       case Stage::Dynamics:
         if (solver) begin_solver_step(model, state, scratch);  // the prediction; the solve comes last
-        else integrate_dynamics(model, state, scratch);
+        else integrate_dynamics(model, state, scratch, scratch.pool);
         break;
       case Stage::BoxUpdate:
-        update_boxes(model, *level.boxes, state, scratch);
+        update_boxes(model, *level.boxes, state, scratch, scratch.pool);
         counters.boxes_updated = static_cast<std::uint32_t>(level.boxes->size());
         break;
       case Stage::BroadPhase: {
@@ -268,8 +214,8 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
         // The paper's response: boxes of two objects come within the level's skin.
         const double margin = level.exact ? model.surface_contact_radius : solver ? kSpeculativeDistance : level.skin;
         if (sleeping(model)) set_wake_margins(model, *level.boxes, state, scratch);
-        grow_box_bounds(model, *level.boxes, margin, scratch);
-        report.hash_overflow = !find_candidate_pairs(model, level, state, scratch, counters);
+        grow_box_bounds(model, *level.boxes, margin, scratch, scratch);
+        report.hash_overflow = !find_candidate_pairs(model, level, scratch, scratch, scratch.pool, counters);
         break;
       }
       case Stage::NarrowPhase: {

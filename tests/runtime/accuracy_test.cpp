@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "collision.h"
+#include "step_memory.h"
 #include "lattice.h"
 #include "ffd/closest_point.h"
 #include "ffd/command.h"
@@ -237,11 +237,12 @@ ScaledSlab scaled_slab_under_box(double scale_y, double height) {
 
 // The exact level's narrow phase on `s` as the step runs it; returns the box's mean y motion.
 double exact_narrow_phase(ScaledSlab& s) {
-  Scratch scratch = make_scratch(s.model);
-  update_boxes(s.model, s.model.boxes, s.state, scratch);
+  Scratch whole = make_scratch(s.model);
+  StepMemory& scratch = whole.memory();
+  update_boxes(s.model, s.model.boxes, s.state, scratch, nullptr);
   StageCounters counters;
-  grow_box_bounds(s.model, s.model.boxes, s.model.surface_contact_radius, scratch);
-  REQUIRE(find_candidate_pairs(s.model, box_level(s.model, Accuracy::Exact), s.state, scratch, counters));
+  grow_box_bounds(s.model, s.model.boxes, s.model.surface_contact_radius, scratch, scratch);
+  REQUIRE(find_candidate_pairs(s.model, box_level(s.model, Accuracy::Exact), scratch, scratch, nullptr, counters));
   const State before = s.state;
   scratch.x_start = s.state.x;  // where the step started, as step() keeps it for the edge contacts
   double depth = 0.0;
@@ -340,7 +341,7 @@ TEST_CASE("Accuracy: the exact level keeps a skin between two objects' surfaces,
     skin = pair.model.surface_skin;
     pair.run(1);
     double deepest = 0.0;
-    for (std::size_t k = 0; k < pair.scratch.contact_count; ++k) deepest = std::max(deepest, pair.scratch.contacts[k].depth);
+    for (const Contact& c : pair.scratch.contacts()) deepest = std::max(deepest, c.depth);
     return deepest;
   };
   double skin = 0.0;
@@ -401,7 +402,7 @@ TEST_CASE("Accuracy: the exact level takes a vertex beside an acute edge, behind
     REQUIRE(distance < pair.model.surface_contact_radius);
     pair.run(1);
     INFO(degrees << " degrees");
-    CHECK(pair.scratch.contact_count == 0);
+    CHECK(pair.scratch.contacts().empty());
   }
 }
 

@@ -7,7 +7,7 @@
 #include <functional>
 #include <random>
 
-#include "collision.h"
+#include "step_memory.h"
 #include "ffd/broad_phase.h"
 #include "ffd/step.h"
 #include "support/test_scenes.h"
@@ -19,7 +19,7 @@ namespace {
 // Uniform in [lo, hi) from std::mt19937's raw output (fixed by the standard).
 double uniform(std::mt19937& rng, double lo, double hi) { return lo + (hi - lo) * (rng() / 4294967296.0); }
 
-std::vector<std::pair<Index, Index>> brute_force(const Scratch& s, std::size_t count,
+std::vector<std::pair<Index, Index>> brute_force(const StepMemory& s, std::size_t count,
                                                  const std::function<bool(Index, Index)>& wanted) {
   std::vector<std::pair<Index, Index>> pairs;
   for (Index a = 0; a < count; ++a)
@@ -34,7 +34,7 @@ std::vector<std::pair<Index, Index>> brute_force(const Scratch& s, std::size_t c
 
 // The pairs found, sorted (the broad phase hands them over in the order the narrow phase
 // answers them).
-std::vector<std::pair<Index, Index>> found(const Scratch& s) {
+std::vector<std::pair<Index, Index>> found(const StepMemory& s) {
   std::vector<std::pair<Index, Index>> pairs;
   for (Index p = 0; p < s.pair_count; ++p) pairs.emplace_back(s.pairs[p].a, s.pairs[p].b);
   std::sort(pairs.begin(), pairs.end());
@@ -47,6 +47,7 @@ struct Scene {
   Model model;
   State state;
   Scratch scratch;
+  StepMemory& memory() { return scratch.memory(); }
 };
 
 Scene spheres(int count, const Vec3& centre, double spread, unsigned seed) {
@@ -78,9 +79,9 @@ Scene slab(const Vec3& size) {
 
 // The boxes of the scene's State, then find_pairs with `query` as a step runs it.
 bool find(Scene& s, const PairQuery& query, StageCounters& counters) {
-  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
-  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
-  return find_pairs(s.model, s.model.boxes, query, s.scratch, counters);
+  update_boxes(s.model, s.model.boxes, s.state, s.memory(), nullptr);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.memory(), s.memory());
+  return find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters);
 }
 
 void check_inter(const Vec3& centre, unsigned seed) {
@@ -89,11 +90,11 @@ void check_inter(const Vec3& centre, unsigned seed) {
   PairQuery query;
   query.inter = true;
   REQUIRE(find(s, query, counters));
-  const auto expected = brute_force(s.scratch, s.model.box_count(), [&](Index a, Index b) {
+  const auto expected = brute_force(s.memory(), s.model.box_count(), [&](Index a, Index b) {
     return s.model.cell_object[s.model.boxes.box_cell[a]] != s.model.cell_object[s.model.boxes.box_cell[b]];
   });
   CHECK(expected.size() > 20);  // the test means something: many overlaps
-  CHECK(found(s.scratch) == expected);  // each once, sorted
+  CHECK(found(s.memory()) == expected);  // each once, sorted
 }
 
 }  // namespace
@@ -119,23 +120,23 @@ TEST_CASE("broad phase: self pairs and neighbour pairs of a folded lattice equal
     if (x.x() > 0.0) x = Vec3(-x.x(), 0.03 - x.y(), x.z());
     x += Vec3::Constant(0.002).cwiseProduct(Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)));
   }
-  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
-  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  update_boxes(s.model, s.model.boxes, s.state, s.memory(), nullptr);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.memory(), s.memory());
   auto lattice_distance = [&](Index a, Index b) {
     return (s.model.boxes.box_lattice[a] - s.model.boxes.box_lattice[b]).cwiseAbs().maxCoeff();
   };
   StageCounters counters;
   PairQuery query;
   query.self = true;
-  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
-  const auto self = brute_force(s.scratch, s.model.box_count(), [&](Index a, Index b) { return lattice_distance(a, b) >= 2; });
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters));
+  const auto self = brute_force(s.memory(), s.model.box_count(), [&](Index a, Index b) { return lattice_distance(a, b) >= 2; });
   CHECK(self.size() > 20);
-  CHECK(found(s.scratch) == self);
+  CHECK(found(s.memory()) == self);
   query.neighbours = true;
-  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
-  const auto all = brute_force(s.scratch, s.model.box_count(), [](Index, Index) { return true; });
+  REQUIRE(find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters));
+  const auto all = brute_force(s.memory(), s.model.box_count(), [](Index, Index) { return true; });
   CHECK(all.size() > self.size());
-  CHECK(found(s.scratch) == all);
+  CHECK(found(s.memory()) == all);
 }
 
 TEST_CASE("broad phase: an undeformed lattice gives no self pair", "[broad_phase]") {
@@ -144,39 +145,39 @@ TEST_CASE("broad phase: an undeformed lattice gives no self pair", "[broad_phase
   PairQuery query;
   query.self = true;
   REQUIRE(find(s, query, counters));
-  CHECK(s.scratch.pair_count == 0);
+  CHECK(s.memory().pair_count == 0);
   CHECK(counters.hash_entries > s.model.box_count());
 }
 
 TEST_CASE("broad phase: a pair buffer too small is reported, and grows between steps", "[broad_phase]") {
   Scene s = spheres(60, Vec3::Zero(), 0.05, 9);
-  s.scratch.pair_workspaces[0].pairs.resize(3);
-  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
-  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
+  s.memory().pair_workspaces[0].pairs.resize(3);
+  update_boxes(s.model, s.model.boxes, s.state, s.memory(), nullptr);
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.memory(), s.memory());
   StageCounters counters;
   PairQuery query;
   query.inter = true;
-  CHECK_FALSE(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
+  CHECK_FALSE(find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters));
   StepReport last;
   last.hash_overflow = true;
-  for (int i = 0; i < 30 && !find_pairs(s.model, s.model.boxes, query, s.scratch, counters); ++i)
+  for (int i = 0; i < 30 && !find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters); ++i)
     grow_scratch(s.model, s.scratch, last);
-  CHECK(find_pairs(s.model, s.model.boxes, query, s.scratch, counters));
-  CHECK(s.scratch.pair_count > 3);
+  CHECK(find_pairs(s.model, s.model.boxes, query, s.memory(), s.memory(), nullptr, counters));
+  CHECK(s.memory().pair_count > 3);
 }
 
 TEST_CASE("broad phase: BroadPhase on recorded boxes finds what the step finds", "[broad_phase]") {
   Scene s = spheres(40, Vec3(1.0, 2.0, 3.0), 0.06, 4);
-  update_boxes(s.model, s.model.boxes, s.state, s.scratch);
+  update_boxes(s.model, s.model.boxes, s.state, s.memory(), nullptr);
   BroadPhase ours(s.model);
-  ours.set_boxes(std::vector<std::array<Vec3, 9>>(s.scratch.box_nodes.begin(), s.scratch.box_nodes.begin() + s.model.box_count()));
+  ours.set_boxes(std::vector<std::array<Vec3, 9>>(s.scratch.box_nodes().begin(), s.scratch.box_nodes().begin() + s.model.box_count()));
   std::vector<std::pair<Index, Index>> wanted, all;
   REQUIRE(ours.find_wanted_pairs(wanted));
   REQUIRE(ours.find_all_pairs(all));
   std::sort(wanted.begin(), wanted.end());
   std::sort(all.begin(), all.end());
-  grow_box_bounds(s.model, s.model.boxes, 0.0, s.scratch);
-  const auto expected_all = brute_force(s.scratch, s.model.box_count(), [](Index, Index) { return true; });
+  grow_box_bounds(s.model, s.model.boxes, 0.0, s.memory(), s.memory());
+  const auto expected_all = brute_force(s.memory(), s.model.box_count(), [](Index, Index) { return true; });
   CHECK(all == expected_all);
   CHECK(wanted.size() < all.size());  // neighbouring cells of one sphere overlap
   for (const auto& p : wanted) CHECK(std::binary_search(all.begin(), all.end(), p));

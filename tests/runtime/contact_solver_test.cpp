@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "contact_solver.h"
+#include "step_memory.h"
 #include "ffd/command.h"
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
@@ -111,7 +111,7 @@ TEST_CASE("Response solver: a box dropped on the floor lands and rests on it", "
     // The box's surface: its FFD AABBs' nodes (the lattice reaches past the surface).
     update_all_boxes(model, state, scratch);
     for (Index b = 0; b < model.boxes.size(); ++b)
-      for (const Vec3& x : scratch.box_nodes[b]) lowest = std::min(lowest, x.y());
+      for (const Vec3& x : scratch.box_nodes()[b]) lowest = std::min(lowest, x.y());
   }
   double fastest = 0.0;
   for (const Vec3& v : state.v) fastest = std::max(fastest, v.norm());
@@ -338,7 +338,7 @@ TEST_CASE("Response solver: a probe driven through a box on the floor never push
     REQUIRE(report.finite);
     update_all_boxes(model, state, scratch);
     for (Index b = 0; b < model.boxes.size(); ++b)
-      for (const Vec3& x : scratch.box_nodes[b]) lowest = std::min(lowest, x.y());
+      for (const Vec3& x : scratch.box_nodes()[b]) lowest = std::min(lowest, x.y());
     deepest_probe = std::min(deepest_probe, state.probe.x.y());
   }
   CHECK(deepest_probe < 0.0);   // the proxy went through: the box was driven hard
@@ -365,8 +365,8 @@ TEST_CASE("Response solver: a node lodged deep in a box is pushed out without fr
   StepReport report;
   step(model, state, scratch, report);
   int lodged = 0, gripping = 0;
-  for (Index i = 0; i < scratch.constraint_count; ++i) {
-    const ContactConstraint& c = scratch.constraints[i];
+  for (Index i = 0; i < scratch.memory().constraint_count; ++i) {
+    const ContactConstraint& c = scratch.memory().constraints[i];
     if (c.lodged) {
       ++lodged;
       CHECK(c.friction == Vec3::Zero());
@@ -409,7 +409,7 @@ TEST_CASE("Response solver: a node just above a plane gets a contact, inactive u
     step(model, state, scratch, report);
     INFO("box bottom " << bottom << " m above the floor");
     CHECK((bottom < kSpeculativeDistance ? report.constraints > 0 : report.constraints == 0));
-    for (Index i = 0; i < scratch.constraint_count; ++i) CHECK(scratch.constraints[i].lambda == 0.0);
+    for (Index i = 0; i < scratch.memory().constraint_count; ++i) CHECK(scratch.memory().constraints[i].lambda == 0.0);
     double moved = 0.0;  // m, the farthest any node went in the step: nothing pushed
     for (std::size_t n = 0; n < state.x.size(); ++n) moved = std::max(moved, (state.x[n] - start.x[n]).norm());
     CHECK(moved < 1e-9);

@@ -13,7 +13,7 @@
 #include "ffd/step.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
-#include "collision.h"
+#include "step_memory.h"
 #include "kernels/box_kernels.h"
 #include "kernels/spring_kernels.h"
 #include "support/test_scenes.h"
@@ -155,7 +155,7 @@ TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, giv
     Run r;
     State state = initial_state(model);
     Scratch scratch = make_scratch(model);
-    scratch.contacts.resize(40);
+    scratch.memory().contacts.resize(40);
     WorkerPool pool(threads);
     if (threads > 1) attach_pool(model, scratch, pool);
     StepReport report;
@@ -163,9 +163,9 @@ TEST_CASE("Determinism: a pile of many objects, its pairs answered in waves, giv
       step(model, state, scratch, report);
       grow_scratch(model, scratch, report);
       r.hashes.push_back(state_hash(state));
-      r.contacts.emplace_back(scratch.contacts.begin(), scratch.contacts.begin() + scratch.contact_count);
+      r.contacts.emplace_back(scratch.contacts().begin(), scratch.contacts().end());
       r.dropped.push_back(report.contacts_dropped);
-      if (scratch.narrow_waves > 0) ++r.steps_in_waves;
+      if (scratch.memory().narrow_waves > 0) ++r.steps_in_waves;
     }
     return r;
   };
@@ -212,14 +212,14 @@ TEST_CASE("Determinism: the box kernel gives trilinear_map's bits for every node
     state.x[n] += 0.003 * Vec3(std::sin(1.3 * n), std::cos(0.7 * n), std::sin(2.1 * n + 1.0));
   Scratch scratch = make_scratch(model);
   for (const BoxSet* set : {&model.boxes, &model.grid_boxes, &model.sub_boxes}) {
-    update_boxes(model, *set, state, scratch);
+    update_boxes(model, *set, state, scratch.memory(), nullptr);
     for (Index b = 0; b < set->size(); ++b) {
       const std::array<Index, 8>& corner = model.cell_nodes[set->box_cell[b]];
       for (int k = 0; k < 9; ++k) {
         const Vec3 expected =
             trilinear_map(set->box_local[b][k], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
         INFO("box " << b << " node " << k);
-        REQUIRE(scratch.box_nodes[b][k] == expected);
+        REQUIRE(scratch.box_nodes()[b][k] == expected);
       }
     }
   }

@@ -88,9 +88,9 @@ TEST_CASE("one step of the narrow phase separates two overlapping boxes", "[resp
   int inside = 0;
   for (Index a = model.objects[0].box_begin; a < model.objects[0].box_end; ++a)
     for (Index b = model.objects[1].box_begin; b < model.objects[1].box_end; ++b) {
-      const BoxPlanes pa = box_planes(scratch.box_nodes[a]), pb = box_planes(scratch.box_nodes[b]);
-      for (const Vec3& p : scratch.box_nodes[b]) inside += node_in_box(pa, p).inside;
-      for (const Vec3& p : scratch.box_nodes[a]) inside += node_in_box(pb, p).inside;
+      const BoxPlanes pa = box_planes(scratch.box_nodes()[a]), pb = box_planes(scratch.box_nodes()[b]);
+      for (const Vec3& p : scratch.box_nodes()[b]) inside += node_in_box(pa, p).inside;
+      for (const Vec3& p : scratch.box_nodes()[a]) inside += node_in_box(pb, p).inside;
     }
   CHECK(inside == 0);
   // alpha = 1: the approach is stopped (the upper box no longer moves down into the lower).

@@ -79,7 +79,7 @@ TEST_CASE("every embedded vertex stays inside its FFD AABB under random affine d
       const Index cell = o.vertex_cell[v];
       REQUIRE(model.boxes.cell_box_begin[cell + 1] == model.boxes.cell_box_begin[cell] + 1);  // a surface cell has one box
       const Index box = model.boxes.cell_box_begin[cell];
-      const BoxPlanes planes = box_planes(scratch.box_nodes[box]);
+      const BoxPlanes planes = box_planes(scratch.box_nodes()[box]);
       REQUIRE_FALSE(planes.degenerate);
       for (int f = 0; f < 6; ++f)
         worst_excess = std::max(worst_excess, planes.normal[f].dot(moved.vertices[v]) - planes.offset[f]);

@@ -7,6 +7,7 @@
 #include "ffd/measure.h"
 #include "ffd/scene_loader.h"
 #include "ffd/step.h"
+#include "step_memory.h"
 #include "support/test_scenes.h"
 
 using namespace ffd;
@@ -123,8 +124,8 @@ TEST_CASE("a scene without collisions builds no broad-phase grid and runs no col
   CHECK_FALSE(model.collides);
   CHECK(model.pipeline == std::vector<Stage>{Stage::Gravity, Stage::Dynamics});
   Scratch scratch = make_scratch(model);
-  CHECK(scratch.pair_workspaces.empty());
-  CHECK(scratch.pairs.empty());
+  CHECK(scratch.memory().pair_workspaces.empty());
+  CHECK(scratch.memory().pairs.empty());
   State state = initial_state(model);
   StepReport report;
   step(model, state, scratch, report);

@@ -148,7 +148,7 @@ BoxSet record_boxes(std::shared_ptr<const ffd::Model> model, const ffd::Scratch&
   set.step = step;
   for (const ffd::ObjectModel& o : model->objects) set.hash_cell_size = std::max(set.hash_cell_size, o.cell_size);
   set.hash_table_size = static_cast<ffd::Index>(std::max<std::size_t>(4000, 2 * model->box_count()));
-  set.boxes.assign(scratch.box_nodes.begin(), scratch.box_nodes.begin() + model->box_count());
+  set.boxes.assign(scratch.box_nodes().begin(), scratch.box_nodes().begin() + model->box_count());
   set.model = std::move(model);
   return set;
 }

@@ -16,9 +16,10 @@ class BroadPhase {
  public:
   // The FFD AABBs (Model::boxes, accuracy level 2) of `model`, which must outlive this.
   explicit BroadPhase(const Model& model);
+  ~BroadPhase();
 
   // The boxes to pair next: the 9 world nodes of each FFD AABB (8 corners, then the centre of
-  // mass), as Scratch::box_nodes holds them after a step.
+  // mass), as Scratch::box_nodes() gives them after a step.
   void set_boxes(const std::vector<std::array<Vec3, 9>>& boxes);
 
   // Every pair of boxes whose AABBs (over their 9 nodes) overlap, touching included, each
@@ -38,8 +39,9 @@ class BroadPhase {
 
  private:
   bool find(bool neighbours, std::vector<std::pair<Index, Index>>& pairs);
+  struct Memory;  // the boxes' bounds and the broad phase's working memory (broad_phase.cpp)
   const Model& model_;
-  Scratch scratch_;
+  std::unique_ptr<Memory> memory_;
 };
 
 }  // namespace ffd
