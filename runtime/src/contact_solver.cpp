@@ -23,8 +23,6 @@ constexpr double kRestingApproach = 0.05;
 
 }  // namespace
 
-const double kSpeculativeDistance = 0.001;
-
 namespace {
 // A node found deeper inside than this (m) beyond what its approach made in the last
 // kRecentEntrySteps steps is lodged: it got there by an error (a large step, a thin box, a
@@ -56,39 +54,6 @@ bool sticks(const ContactConstraint& c, double mu) {
   return mu > 0.0 && !c.lodged && c.friction.norm() < kStuck * mu * c.lambda;
 }
 
-// The side carried by cell `cell`'s nodes with `weight`, those of weight 0 left out, in
-// cell order: a box corner is one node, a face's mean four. The passes read and move a side
-// many times a step; a weight of 0 adds exactly 0, so the sums are the same bit for bit.
-ContactSide carried_by(const Model& model, Index cell, const std::array<double, 8>& weight) {
-  ContactSide side;
-  side.node.fill(kNoIndex);
-  side.weight.fill(0.0);
-  side.count = 0;
-  side.cell = cell;
-  for (int j = 0; j < 8; ++j) {
-    if (weight[j] == 0.0) continue;
-    side.node[side.count] = model.cell_nodes[cell][j];
-    side.weight[side.count] = weight[j];
-    ++side.count;
-  }
-  return side;
-}
-
-// A point carried by cell `cell` at local coordinates `local` (eq. 2).
-ContactSide cell_point(const Model& model, Index cell, const Vec3& local) {
-  return carried_by(model, cell, trilinear_weights(local));
-}
-
-// The mean of a box face's four corners: the point its plane moves with.
-ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int face) {
-  std::array<double, 8> weight{};
-  for (int i = 0; i < 4; ++i) {
-    const std::array<double, 8> w = trilinear_weights(boxes.box_local[b][kBoxFaces[face][i]]);
-    for (int j = 0; j < 8; ++j) weight[j] += 0.25 * w[j];
-  }
-  return carried_by(model, boxes.box_cell[b], weight);
-}
-
 // The proxy's inverse mass as the contacts see it: its coupling is integrated by backward
 // Euler (interaction.cpp), so within a step it answers a push like a mass m + dt c + dt^2 k.
 // With the bare mass, a very stiff coupling held the proxy back at a box pinned on the floor
@@ -98,16 +63,6 @@ double probe_inv_mass(const Model& model, const State& state) {
   const double dt = model.settings.dt;
   return 1.0 / (model.settings.probe.mass + dt * model.settings.probe.coupling_damping +
                 dt * dt * state.params.probe_stiffness);
-}
-
-ContactSide probe_point() {
-  ContactSide side;
-  side.node.fill(kNoIndex);
-  side.weight.fill(0.0);
-  side.node[0] = kProbeNode;
-  side.weight[0] = 1.0;
-  side.count = 1;
-  return side;
 }
 
 // The solve's view of the nodes: positions, velocities and inverse masses, the probe proxy
@@ -156,13 +111,6 @@ struct Bodies {
   }
 };
 
-// A contact's identity from step to step: what touches what (kind), the accuracy level whose
-// boxes the ids name, and the two ids; 0 (never anchored) where an id does not fit.
-enum class ContactKey : std::uint64_t { None = 0, BoxNode = 1, PlaneNode = 2, PlaneVertex = 3 };
-std::uint64_t contact_key(ContactKey kind, Accuracy accuracy, std::uint64_t a, std::uint64_t b) {
-  if (kind == ContactKey::None || a >= (std::uint64_t{1} << 29) || b >= (std::uint64_t{1} << 30)) return 0;
-  return (static_cast<std::uint64_t>(kind) << 62) | (static_cast<std::uint64_t>(accuracy) << 59) | (a << 30) | b;
-}
 // Box `mover`'s tested node k against face `face` of box `container`.
 std::uint64_t box_contact_key(Accuracy accuracy, Index container, int face, Index mover, int k) {
   if (k >= 256) return 0;
@@ -208,33 +156,31 @@ Mat3 anchor_frame(const Bodies& bodies, const BoxSet* boxes, const ContactConstr
   return c.face_box == kNoIndex ? Mat3::Identity() : face_frame(bodies, *boxes, c.face_box, c.face);
 }
 
-// Appends a contact: side b's point must stay on the outer side (along n) of side a's
-// surface; it is `depth` inside now. `key` names it from step to step (0: never anchored),
-// on face `face` of box `face_box` of `boxes` (kNoIndex: a plane).
-void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactSide& a, const ContactSide& b, const Vec3& n,
-                 double depth, std::uint64_t key = 0, const BoxSet* boxes = nullptr, Index face_box = kNoIndex,
-                 int face = 0) {
+// Appends a contact as a constraint: side b's point must stay on the outer side (along n) of
+// side a's surface; it is `depth` inside now. Its key names it from step to step (0: never
+// anchored); a contact on a face of a box of `boxes` keeps its anchor in that face's frame.
+void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord& r, const BoxSet* boxes = nullptr) {
   const double dt = bodies.model.settings.dt;
   if (scratch.constraint_count >= scratch.constraints.size()) {
     scratch.constraints_dropped = true;
     return;
   }
   ContactConstraint& c = scratch.constraints[scratch.constraint_count++];
-  c.a = a;
-  c.b = b;
-  c.normal = n;
-  c.rest = n.dot(bodies.point(b) - bodies.point(a)) + depth;
-  c.key = key;
-  const ContactAnchor* anchor = find_anchor(bodies.state, key);
-  c.face_box = face_box;
-  c.face = static_cast<std::uint8_t>(face);
+  c.a = r.a;
+  c.b = r.b;
+  c.normal = r.normal;
+  c.rest = r.normal.dot(bodies.point(r.b) - bodies.point(r.a)) + r.depth;
+  c.key = r.key;
+  const ContactAnchor* anchor = find_anchor(bodies.state, r.key);
+  c.face_box = r.face_box;
+  c.face = r.face;
   c.hold = anchor ? Vec3(anchor_frame(bodies, boxes, c) * anchor->offset)
-                  : Vec3(bodies.point_prev(b) - bodies.point_prev(a));
-  c.approach = n.dot(bodies.velocity(b) - bodies.velocity(a));
+                  : Vec3(bodies.point_prev(r.b) - bodies.point_prev(r.a));
+  c.approach = r.normal.dot(bodies.velocity(r.b) - bodies.velocity(r.a));
   c.inv_mass = 0.0;
   c.lambda = 0.0;
   c.friction = Vec3::Zero();
-  c.lodged = depth > kLodgedDepth + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
+  c.lodged = r.depth > kLodgedDepth + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
 }
 
 }  // namespace
@@ -290,9 +236,17 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
               max_depth = std::max(max_depth, depth);
               scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
             }
-            add_contact(bodies, scratch, face_point(model, boxes, container, face),
-                        cell_point(model, cell_b, tested_node_local(model, level, mover, k)), planes.normal[face], depth,
-                        box_contact_key(state.params.accuracy, container, face, mover, k), &boxes, container, face);
+            ContactRecord r;
+            r.a = face_point(model, boxes, container, face);
+            r.b = cell_point(model, cell_b, tested_node_local(model, level, mover, k));
+            r.normal = planes.normal[face];
+            r.depth = depth;
+            r.point = node;
+            r.kind = self ? ContactKind::Self : ContactKind::Inter;
+            r.key = box_contact_key(state.params.accuracy, container, face, mover, k);
+            r.face_box = container;
+            r.face = static_cast<std::uint8_t>(face);
+            add_contact(bodies, scratch, r, &boxes);
             return false;  // answered in the solve, not at once
           });
     }
@@ -308,12 +262,28 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
   // out in one step and pulled back through by its springs in the next, and swung so for
   // ever (docs/notes/2026-11-28-code-findings.md#speculative-plane-contacts).
   const double margin = kSpeculativeDistance;
-  ContactSide ground;
-  ground.node.fill(kNoIndex);
-  ground.weight.fill(0.0);
-  ground.count = 0;
   const int node_count = tested_node_count(level);
   const Accuracy accuracy = state.params.accuracy;
+  // Side b's point (`side`, at `p`) `height` above the plane: a contact within the margin.
+  const auto plane_contact = [&](const PlaneModel& plane, const ContactSide& side, const Vec3& p, double height,
+                                 std::uint64_t key) {
+    ++counters.node_tests;
+    if (!(height < margin)) return;
+    if (height < 0.0) {
+      ++counters.plane_contacts;
+      max_depth = std::max(max_depth, -height);
+      scratch.record_contact(p, plane.normal, -height, ContactKind::Plane);
+    }
+    ContactRecord r;
+    r.a = static_side();
+    r.b = side;
+    r.normal = plane.normal;
+    r.depth = -height;
+    r.point = p;
+    r.kind = ContactKind::Plane;
+    r.key = key;
+    add_contact(bodies, scratch, r);
+  };
   for (Index plane_index = 0; plane_index < model.planes.size(); ++plane_index) {
     const PlaneModel& plane = model.planes[plane_index];
     for (Index b = 0; b < boxes.size(); ++b) {
@@ -327,32 +297,17 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
         // Level 5: the cell's surface vertices.
         for (Index i = model.cell_vertex_begin[cell]; i < model.cell_vertex_begin[cell + 1]; ++i) {
           const Index vertex = model.cell_vertices[i];
-          const ContactSide side = cell_point(model, cell, model.surface_vertex_local[vertex]);
-          const double height = plane.normal.dot(bodies.point(side)) - plane.offset;
-          ++counters.node_tests;
-          if (!(height < margin)) continue;
-          if (height < 0.0) {
-            ++counters.plane_contacts;
-            max_depth = std::max(max_depth, -height);
-            scratch.record_contact(bodies.point(side), plane.normal, -height, ContactKind::Plane);
-          }
-          add_contact(bodies, scratch, ground, side, plane.normal, -height,
-                      contact_key(ContactKey::PlaneVertex, accuracy, plane_index, vertex));
+          const ContactSide side = vertex_point(model, vertex);
+          const Vec3 p = bodies.point(side);
+          plane_contact(plane, side, p, plane.normal.dot(p) - plane.offset,
+                        contact_key(ContactKey::PlaneVertex, accuracy, plane_index, vertex));
         }
         continue;
       }
       for (int k = 0; k < node_count; ++k) {
         const Vec3 p = tested_node(model, level, state, scratch, b, k);
-        const double height = plane.normal.dot(p) - plane.offset;
-        ++counters.node_tests;
-        if (!(height < margin)) continue;
-        if (height < 0.0) {
-          ++counters.plane_contacts;
-          max_depth = std::max(max_depth, -height);
-          scratch.record_contact(p, plane.normal, -height, ContactKind::Plane);
-        }
-        add_contact(bodies, scratch, ground, cell_point(model, cell, tested_node_local(model, level, b, k)),
-                    plane.normal, -height, plane_contact_key(accuracy, plane_index, b, k));
+        plane_contact(plane, cell_point(model, cell, tested_node_local(model, level, b, k)), p,
+                      plane.normal.dot(p) - plane.offset, plane_contact_key(accuracy, plane_index, b, k));
       }
     }
   }
@@ -360,51 +315,30 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
 
 void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, StepMemory& scratch,
                          StageCounters& counters, double& max_depth) {
-  const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
-  const double dt = model.settings.dt;
   scratch.probe_x_prev = probe.x;
   scratch.probe_device_velocity = step_probe_coupling(model, state);  // the proxy's prediction
 
   const Bodies bodies{model, state, scratch};
-  const double radius = settings.radius, recent = kRecentEntrySteps * dt;
-  const Vec3 lo = probe.x - Vec3::Constant(radius), hi = probe.x + Vec3::Constant(radius);
-  for (Index b = 0; b < boxes.size(); ++b) {
-    ensure_box(model, boxes, state, scratch, b, counters);
-    if (lo.x() > scratch.box_hi[0][b] || lo.y() > scratch.box_hi[1][b] || lo.z() > scratch.box_hi[2][b] ||
-        hi.x() < scratch.box_lo[0][b] || hi.y() < scratch.box_lo[1][b] || hi.z() < scratch.box_lo[2][b])
-      continue;
-    const Index cell = boxes.box_cell[b];
-    wake(state, model.cell_object[cell]);
-    // The probe's nodes in the box: the probe (side b) stays out of the box's face (side a).
-    scan_points_in_box(
-        scratch, b, 0.0, recent, kProbeNodeCount,
-        [&](int n) { return Vec3(probe.x + radius * kProbeNodeOffsets[n]); },
-        [&] { return Vec3(probe.v - mean_velocity(state, model.cell_nodes[cell])); },
-        [&](int, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
-          ++counters.node_tests;
-          if (!hit.inside) return false;
-          ++counters.probe_contacts;
-          max_depth = std::max(max_depth, hit.depth);
-          scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
-          add_contact(bodies, scratch, face_point(model, boxes, b, hit.face), probe_point(), planes.normal[hit.face],
-                      hit.depth);
-          return false;
-        });
-    // The box's nodes in the sphere: each node (side b) stays out of the sphere (side a).
-    for (int n = 0; n < 9; ++n) {
-      ++counters.node_tests;
-      const Vec3 offset = scratch.box_nodes[b][n] - probe.x;
-      const double distance = offset.norm();
-      if (!(distance < radius) || !(distance > 1e-12)) continue;
-      const Vec3 outward = offset / distance;
-      ++counters.probe_contacts;
-      max_depth = std::max(max_depth, radius - distance);
-      scratch.record_contact(scratch.box_nodes[b][n], outward, radius - distance, ContactKind::Probe);
-      add_contact(bodies, scratch, probe_point(), cell_point(model, cell, boxes.box_local[b][n]), outward,
-                  radius - distance);
-    }
-  }
+  find_probe_box_contacts(
+      model, boxes, state, scratch, counters, max_depth,
+      [&](Index b) { wake(state, model.cell_object[boxes.box_cell[b]]); },
+      [&](const ProbeContact& c) {
+        ContactRecord r;
+        if (c.node >= 0) {  // the box's node (side b) stays out of the sphere (side a)
+          r.a = probe_point();
+          r.b = cell_point(model, c.cell, boxes.box_local[c.box][static_cast<std::size_t>(c.node)]);
+        } else {  // the probe (side b) stays out of the box's face (side a)
+          r.a = face_point(model, boxes, c.box, c.face);
+          r.b = probe_point();
+        }
+        r.normal = c.normal;
+        r.depth = c.depth;
+        r.point = c.point;
+        r.kind = ContactKind::Probe;
+        add_contact(bodies, scratch, r);
+        return false;  // answered in the solve, not at once
+      });
 }
 
 namespace {

@@ -26,25 +26,15 @@
 #include <vector>
 
 #include "boxes.h"
+#include "contact_record.h"
 #include "ffd/model.h"
 #include "ffd/state.h"
 #include "ffd/step.h"
 
 namespace ffd {
 
-// The response "solver" (contact_solver.h): a contact is a constraint between two points, each
-// carried by lattice nodes through trilinear weights (eq. 2): the point that must stay out
-// (side b: a box node, a surface node, the probe) and a point of the surface it must stay
-// out of (side a: the mean of a box face's four corners, the probe's centre, nothing for a
-// static plane). A node index kProbeNode stands for the probe proxy.
-inline constexpr Index kProbeNode = kNoIndex - 1;
-struct ContactSide {
-  std::array<Index, 8> node;
-  std::array<double, 8> weight;
-  std::array<double, 8> share{};  // 1/kg: weight / mass of each node in this step's solve (0: static)
-  std::uint8_t count = 0;         // node[0 .. count) carry the point
-  Index cell = kNoIndex;          // the lattice cell whose 8 nodes these are (none: the probe, a plane)
-};
+// A contact as the solver holds it: a ContactRecord's two sides (contact_record.h), side b's
+// point kept on the outer side of side a's surface.
 struct ContactConstraint {
   ContactSide a, b;
   Vec3 normal = Vec3::Zero();    // unit, from side a's surface towards the outside
@@ -99,10 +89,6 @@ struct SolverMemory {
   std::uint64_t node_stamp_epoch = 0;
 };
 
-
-// How far outside a box face (m) a node still gets a contact: a speculative one, inactive
-// unless the solve would move the node in. The broad phase grows the boxes by as much.
-extern const double kSpeculativeDistance;
 
 void begin_solver_step(const Model& model, State& state, StepMemory& memory);
 

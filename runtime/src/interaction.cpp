@@ -36,44 +36,6 @@ void respond_cell_probe(const Model& model, State& state, Index cell, const Vec3
   answer_at_once(model, state, ResponseSide::of_cell(cell), ResponseSide::probe(), n, r, beta, true);
 }
 
-// The probe against box b both ways: its 27 nodes in the box (node-in-box, eq. 3-7), and
-// the box's 9 nodes in the probe's sphere.
-void probe_against_box(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, Index b, double beta,
-                       StageCounters& counters, double& max_depth) {
-  const double radius = model.settings.probe.radius;
-  const Index cell = boxes.box_cell[b];
-  ProbeState& probe = state.probe;
-  scan_points_in_box(
-      scratch, b, 0.0, kRecentEntrySteps * model.settings.dt, kProbeNodeCount,
-      [&](int k) { return Vec3(probe.x + radius * kProbeNodeOffsets[k]); },
-      [&] { return Vec3(probe.v - mean_velocity(state, model.cell_nodes[cell])); },
-      [&](int, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
-        ++counters.node_tests;
-        if (!hit.inside) return false;
-        ++counters.probe_contacts;
-        max_depth = std::max(max_depth, hit.depth);
-        scratch.record_contact(node, planes.normal[hit.face], hit.depth, ContactKind::Probe);
-        respond_cell_probe(model, state, cell, planes.normal[hit.face], hit.depth, beta);
-        invalidate_around(model, boxes, scratch, cell);
-        ensure_box(model, boxes, state, scratch, b, counters);
-        return true;
-      });
-  for (int k = 0; k < 9; ++k) {
-    ++counters.node_tests;
-    const Vec3 offset = scratch.box_nodes[b][k] - probe.x;
-    const double distance = offset.norm();
-    if (!(distance < radius) || !(distance > 1e-12)) continue;
-    const Vec3 outward = offset / distance;  // the sphere's normal at the node
-    const double depth = radius - distance;
-    ++counters.probe_contacts;
-    max_depth = std::max(max_depth, depth);
-    scratch.record_contact(scratch.box_nodes[b][k], outward, depth, ContactKind::Probe);
-    respond_cell_probe(model, state, cell, -outward, depth, beta);
-    invalidate_around(model, boxes, scratch, cell);
-    ensure_box(model, boxes, state, scratch, b, counters);
-  }
-}
-
 }  // namespace
 
 Vec3 step_probe_coupling(const Model& model, State& state) {
@@ -108,21 +70,20 @@ namespace {
 // damping are stable at the fixed step; then contacts; then the force the device renders.
 void step_probe(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch, StageCounters& counters,
                 double& max_depth) {
-  const ProbeSettings& settings = model.settings.probe;
   ProbeState& probe = state.probe;
   const Vec3 device_velocity = step_probe_coupling(model, state);
 
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
-  const Vec3 lo = probe.x - Vec3::Constant(settings.radius), hi = probe.x + Vec3::Constant(settings.radius);
-  for (Index b = 0; b < boxes.size(); ++b) {
-    // The box's AABB (Scratch::box_lo/hi) is kept with its nodes: by the box update, by
-    // ensure_box, and grown, never shrunk, by the broad phase's margins.
-    ensure_box(model, boxes, state, scratch, b, counters);
-    if (lo.x() > scratch.box_hi[0][b] || lo.y() > scratch.box_hi[1][b] || lo.z() > scratch.box_hi[2][b] ||
-        hi.x() < scratch.box_lo[0][b] || hi.y() < scratch.box_lo[1][b] || hi.z() < scratch.box_lo[2][b])
-      continue;
-    probe_against_box(model, boxes, state, scratch, b, beta, counters, max_depth);
-  }
+  find_probe_box_contacts(
+      model, boxes, state, scratch, counters, max_depth, [](Index) {},
+      [&](const ProbeContact& c) {
+        // `normal` separates the two for the probe: along it out of the box's face, or into
+        // the sphere's for a box node.
+        respond_cell_probe(model, state, c.cell, c.node >= 0 ? Vec3(-c.normal) : c.normal, c.depth, beta);
+        invalidate_around(model, boxes, scratch, c.cell);
+        ensure_box(model, boxes, state, scratch, c.box, counters);
+        return true;
+      });
   probe.force = probe_force(model, state, device_velocity);
 }
 
