@@ -2,10 +2,10 @@
 // The Interaction stage: the haptic probe (virtual coupling + contacts with the FFD AABBs)
 // and the grab spring. Runs after the collision stages so that what a user does acts on the
 // step's final positions, and the force output is that of the finished step.
-#include "ffd/model.h"
 #include <algorithm>
 
 #include "collision.h"
+#include "ffd/model.h"
 
 namespace ffd {
 
@@ -31,7 +31,6 @@ Vec3 probe_force(const Model& model, const State& state, const Vec3& device_velo
 // 1 / k), the change of the point's velocity this step (m/s).
 Vec3 grab_velocity_change(const Model& model, double inv_mass, const Vec3& to_target, const Vec3& velocity,
                           const Vec3& force_so_far);
-
 
 // The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
 // directions, 12 edge and 8 corner directions of a cube (27 in all).
