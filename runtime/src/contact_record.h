@@ -6,7 +6,6 @@
 // point is to stay on the outer side, along the normal, of side a's surface.
 #include <array>
 #include <cstdint>
-#include <vector>
 
 #include "ffd/model.h"
 #include "ffd/step.h"
@@ -60,8 +59,6 @@ struct ContactRecord {
   ContactSide a, b;
   Vec3 normal = Vec3::Zero();  // unit, out of side a's surface
   double depth = 0.0;          // m: how far side b's point is to go along the normal (< 0: that far out already)
-  Vec3 point = Vec3::Zero();   // m, where (for display)
-  ContactKind kind = ContactKind::Inter;
   std::uint64_t key = 0;       // from step to step (0: none)
   Index face_box = kNoIndex;   // side a's box and face, whose frame an anchor is kept in
   std::uint8_t face = 0;       // (kNoIndex: the world's)

@@ -241,8 +241,6 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
             r.b = cell_point(model, cell_b, tested_node_local(model, level, mover, k));
             r.normal = planes.normal[face];
             r.depth = depth;
-            r.point = node;
-            r.kind = self ? ContactKind::Self : ContactKind::Inter;
             r.key = box_contact_key(state.params.accuracy, container, face, mover, k);
             r.face_box = container;
             r.face = static_cast<std::uint8_t>(face);
@@ -279,8 +277,6 @@ void find_plane_contacts(const Model& model, const BoxLevel& level, State& state
     r.b = side;
     r.normal = plane.normal;
     r.depth = -height;
-    r.point = p;
-    r.kind = ContactKind::Plane;
     r.key = key;
     add_contact(bodies, scratch, r);
   };
@@ -334,8 +330,6 @@ void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, 
         }
         r.normal = c.normal;
         r.depth = c.depth;
-        r.point = c.point;
-        r.kind = ContactKind::Probe;
         add_contact(bodies, scratch, r);
         return false;  // answered in the solve, not at once
       });
