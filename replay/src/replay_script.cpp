@@ -25,8 +25,12 @@ const std::vector<std::string_view> kStiffnessKeys = {"object", "value"};
 const std::vector<std::string_view> kPathKeys = {"interpolation", "keyframes"};
 const std::vector<std::string_view> kKeyframeKeys = {"at_step", "at_ms", "position"};
 const std::vector<std::string_view> kInterpolations = {"linear", "smooth", "step"};
+const std::vector<std::string_view> kResponseAssertKeys = {"latency", "stability", "contact", "gap", "intersections",
+                                                           "position", "rest", "motion", "creep", "force",
+                                                           "force_window", "hash"};
 const std::vector<std::string_view> kAssertKeys = {"latency", "stability", "contact", "gap", "intersections", "position",
-                                                   "rest", "motion", "creep", "force", "force_window", "hash"};
+                                                   "rest", "motion", "creep", "force", "force_window", "hash",
+                                                   "paper", "solver"};
 const std::vector<std::string_view> kIntersectionKeys = {"max_pairs", "from_step", "from_ms", "to_step",
                                                          "to_ms", "every_steps", "every_ms"};
 const std::vector<std::string_view> kMotionKeys = {"rms_speed_max_m_s", "kinetic_energy_max_j", "speed_max_m_s",
@@ -62,8 +66,8 @@ std::string location(const std::string& origin, const toml::source_region& where
 class ScriptReader {
  public:
   ScriptReader(const std::string& origin, const std::string& base_dir, const SceneLimits& limits,
-               RecordedScene recorded_scene)
-      : origin_(origin), base_dir_(base_dir), limits_(limits), recorded_scene_(recorded_scene) {}
+               RecordedScene recorded_scene, std::optional<ContactResponse> response)
+      : origin_(origin), base_dir_(base_dir), limits_(limits), recorded_scene_(recorded_scene), response_(response) {}
 
   LoadedReplay read(const toml::table& root_table) {
     const TableReader root(origin_, root_table, "", kRootKeys);
@@ -92,6 +96,12 @@ class ScriptReader {
       read_scene(root, script);
     }
     if (script.recorded) check_recorded_files(root, script);
+    if (response_) {
+      if (script.recorded)
+        throw ReplayError(origin_ + ": a recording replays the response it was recorded with (the run asked for " +
+                          std::string(response_name(*response_)) + ")");
+      script.scene.settings.response = *response_;
+    }
     std::vector<std::string> log;
     try {
       out.model = compile(script.scene, log);
@@ -467,14 +477,49 @@ class ScriptReader {
     }
   }
 
+  // [assert] and the per-response tables under it: [assert.paper] and [assert.solver] add
+  // their assertions to [assert]'s when the run is under that response, for figures that
+  // describe what one response does rather than stability (docs/replays.md). The other
+  // response's table is read too, so that its mistakes are reported whatever the run.
   void read_assertions(const toml::table& table, ReplayScript& script) const {
+    read_assertion_tables(table, "assert", kAssertKeys, script);
     const TableReader a(origin_, table, "assert", kAssertKeys);
+    for (const ContactResponse response : {ContactResponse::Paper, ContactResponse::Solver}) {
+      const std::string name = response_name(response);
+      const toml::table* section = a.subtable(name);
+      if (!section) continue;
+      const std::string prefix = "assert." + name;
+      for (const Command& c : script.commands)
+        if (c.kind == CommandKind::SetResponse)
+          a.fail_at(name, "per-response assertions need one response for the whole run, and the script switches "
+                          "the response at step " + std::to_string(c.step));
+      for (const std::string_view single : {"latency", "stability", "contact", "rest", "motion", "force"})
+        if (table.contains(single) && section->contains(single))
+          a.fail_at(name, "[" + prefix + "." + std::string(single) + "] is given in [assert] too; a table under [" +
+                              prefix + "] adds to [assert]'s, so give each single table in one place");
+      if (response == model_->settings.response) {
+        read_assertion_tables(*section, prefix, kResponseAssertKeys, script);
+      } else {
+        ReplayScript unused;
+        unused.steps = script.steps;
+        unused.commands = script.commands;
+        read_assertion_tables(*section, prefix, kResponseAssertKeys, unused);
+      }
+    }
+    std::stable_sort(script.hashes.begin(), script.hashes.end(),
+                     [](const HashCheck& x, const HashCheck& y) { return x.step < y.step; });
+  }
+
+  // One [assert] table's assertions (or one [assert.<response>] table's), added to `script`.
+  void read_assertion_tables(const toml::table& table, const std::string& prefix,
+                             const std::vector<std::string_view>& keys, ReplayScript& script) const {
+    const TableReader a(origin_, table, prefix, keys);
     auto optional_number = [](const TableReader& t, std::string_view key, const Bounds& bounds) -> std::optional<double> {
       if (!t.has(key)) return std::nullopt;
       return t.number(key, 0.0, bounds);
     };
     if (const toml::table* latency = a.subtable("latency")) {
-      const TableReader l(origin_, *latency, "assert.latency", kLatencyKeys);
+      const TableReader l(origin_, *latency, prefix + ".latency", kLatencyKeys);
       LatencyLimits& lim = script.latency;
       lim.compute_p50_us = optional_number(l, "compute_p50_us", kPositive);
       lim.compute_p99_us = optional_number(l, "compute_p99_us", kPositive);
@@ -486,7 +531,7 @@ class ScriptReader {
         lim.deadline_misses = static_cast<std::uint64_t>(l.integer("deadline_misses", 0, 0, kMaxSteps));
     }
     if (const toml::table* stability = a.subtable("stability")) {
-      const TableReader s(origin_, *stability, "assert.stability", kStabilityKeys);
+      const TableReader s(origin_, *stability, prefix + ".stability", kStabilityKeys);
       script.stability.finite = s.boolean("finite", false);
       script.stability.energy_max_j = optional_number(s, "energy_max_j", kAnyValue);
       script.stability.energy_gain_max_j = optional_number(s, "energy_gain_max_j", kAnyValue);
@@ -508,7 +553,7 @@ class ScriptReader {
             static_cast<std::uint64_t>(s.integer("inverted_steps_max", 0, 0, kMaxSteps));
     }
     if (const toml::table* contact = a.subtable("contact")) {
-      const TableReader c(origin_, *contact, "assert.contact", kContactKeys);
+      const TableReader c(origin_, *contact, prefix + ".contact", kContactKeys);
       script.contact.max_penetration_m = optional_number(c, "max_penetration_m", kNonNegative);
       if (c.has("min_contacts")) {
         script.contact.min_contacts = static_cast<std::uint64_t>(c.integer("min_contacts", 0, 0, 1'000'000'000));
@@ -520,7 +565,7 @@ class ScriptReader {
       }
     }
     if (const toml::table* force = a.subtable("force")) {
-      const TableReader f(origin_, *force, "assert.force", kForceKeys);
+      const TableReader f(origin_, *force, prefix + ".force", kForceKeys);
       if (!has(model_->settings.effects, Effect::Probe))
         a.fail_at("force", "force assertions need the \"probe\" effect in the scene");
       script.force.max_n = optional_number(f, "max_n", kPositive);
@@ -528,7 +573,7 @@ class ScriptReader {
     }
     const auto gaps = array_of_tables(a, "gap");
     for (std::size_t i = 0; i < gaps.size(); ++i) {
-      const std::string path = "assert.gap[" + std::to_string(i) + "]";
+      const std::string path = prefix + ".gap[" + std::to_string(i) + "]";
       const TableReader g(origin_, *gaps[i], path, kGapKeys);
       GapLimit gap;
       gap.where = location(origin_, gaps[i]->source());
@@ -550,7 +595,7 @@ class ScriptReader {
     }
     const auto intersections = array_of_tables(a, "intersections");
     for (std::size_t i = 0; i < intersections.size(); ++i) {
-      const std::string path = "assert.intersections[" + std::to_string(i) + "]";
+      const std::string path = prefix + ".intersections[" + std::to_string(i) + "]";
       const TableReader t(origin_, *intersections[i], path, kIntersectionKeys);
       IntersectionLimit limit;
       limit.where = location(origin_, intersections[i]->source());
@@ -561,7 +606,7 @@ class ScriptReader {
     }
     const auto positions = array_of_tables(a, "position");
     for (std::size_t i = 0; i < positions.size(); ++i) {
-      const std::string path = "assert.position[" + std::to_string(i) + "]";
+      const std::string path = prefix + ".position[" + std::to_string(i) + "]";
       const TableReader p(origin_, *positions[i], path, kPositionKeys);
       PositionLimit limit;
       limit.where = location(origin_, positions[i]->source());
@@ -579,29 +624,29 @@ class ScriptReader {
       script.positions.push_back(limit);
     }
     if (const toml::table* rest = a.subtable("rest")) {
-      const TableReader r(origin_, *rest, "assert.rest", kRestKeys);
+      const TableReader r(origin_, *rest, prefix + ".rest", kRestKeys);
       if (!r.has("speed_max_m_s")) r.fail_missing("speed_max_m_s", " (m/s: the fastest an object's centre of mass may move)");
       script.rest.speed_max_m_s = r.number("speed_max_m_s", 0.0, kPositive);
       script.rest.from_step = time_of(r, "from", false).value_or(0);
       script.rest.every_steps = interval_of(r).value_or(10);
-      if (script.rest.every_steps == 0) r.fail_here("assert.rest", "'every' must be at least one step");
+      if (script.rest.every_steps == 0) r.fail_here(prefix + ".rest", "'every' must be at least one step");
       if (script.rest.from_step + script.rest.every_steps > script.steps)
-        r.fail_here("assert.rest", "the window from 'from' leaves no whole 'every' interval before the end of the run");
+        r.fail_here(prefix + ".rest", "the window from 'from' leaves no whole 'every' interval before the end of the run");
     }
     if (const toml::table* motion = a.subtable("motion")) {
-      const TableReader m(origin_, *motion, "assert.motion", kMotionKeys);
+      const TableReader m(origin_, *motion, prefix + ".motion", kMotionKeys);
       script.motion.rms_speed_max_m_s = optional_number(m, "rms_speed_max_m_s", kPositive);
       script.motion.kinetic_energy_max_j = optional_number(m, "kinetic_energy_max_j", kPositive);
       script.motion.speed_max_m_s = optional_number(m, "speed_max_m_s", kPositive);
       if (!script.motion.rms_speed_max_m_s && !script.motion.kinetic_energy_max_j && !script.motion.speed_max_m_s)
-        m.fail_here("assert.motion", "give 'rms_speed_max_m_s', 'kinetic_energy_max_j' and/or 'speed_max_m_s'");
+        m.fail_here(prefix + ".motion", "give 'rms_speed_max_m_s', 'kinetic_energy_max_j' and/or 'speed_max_m_s'");
       script.motion.from_step = time_of(m, "from", false).value_or(0);
       if (script.motion.from_step >= script.steps)
         m.fail_at(m.has("from_ms") ? "from_ms" : "from_step", "starts after the run's last step");
     }
     const auto creeps = array_of_tables(a, "creep");
     for (std::size_t i = 0; i < creeps.size(); ++i) {
-      const std::string path = "assert.creep[" + std::to_string(i) + "]";
+      const std::string path = prefix + ".creep[" + std::to_string(i) + "]";
       const TableReader c(origin_, *creeps[i], path, kCreepKeys);
       CreepLimit creep;
       creep.where = location(origin_, creeps[i]->source());
@@ -614,7 +659,7 @@ class ScriptReader {
     }
     const auto windows = array_of_tables(a, "force_window");
     for (std::size_t i = 0; i < windows.size(); ++i) {
-      const std::string path = "assert.force_window[" + std::to_string(i) + "]";
+      const std::string path = prefix + ".force_window[" + std::to_string(i) + "]";
       const TableReader w(origin_, *windows[i], path, kForceWindowKeys);
       if (!has(model_->settings.effects, Effect::Probe))
         w.fail_here(path, "force assertions need the \"probe\" effect in the scene");
@@ -634,7 +679,7 @@ class ScriptReader {
     }
     const auto hashes = array_of_tables(a, "hash");
     for (std::size_t i = 0; i < hashes.size(); ++i) {
-      const TableReader h(origin_, *hashes[i], "assert.hash[" + std::to_string(i) + "]", kHashKeys);
+      const TableReader h(origin_, *hashes[i], prefix + ".hash[" + std::to_string(i) + "]", kHashKeys);
       HashCheck check;
       check.where = location(origin_, hashes[i]->source());
       if (!h.has("step")) h.fail_missing("step");
@@ -647,8 +692,6 @@ class ScriptReader {
       check.value = std::stoull(*value, nullptr, 16);
       script.hashes.push_back(check);
     }
-    std::stable_sort(script.hashes.begin(), script.hashes.end(),
-                     [](const HashCheck& x, const HashCheck& y) { return x.step < y.step; });
   }
 
   // The required key `object` of an assertion: its text, and the objects it names.
@@ -685,6 +728,7 @@ class ScriptReader {
   const std::string& base_dir_;
   const SceneLimits& limits_;
   RecordedScene recorded_scene_;
+  std::optional<ContactResponse> response_;  // the run's response, when the caller chose it
   const Model* model_ = nullptr;
   std::uint64_t path_commands_ = 0;  // commands from the keyframed paths so far
   double dt_ms_ = 1.0;
@@ -694,7 +738,8 @@ class ScriptReader {
 }  // namespace
 
 LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
-                          const SceneLimits& limits, RecordedScene recorded_scene) {
+                          const SceneLimits& limits, RecordedScene recorded_scene,
+                          std::optional<ContactResponse> response) {
   // A recording written as the session ran ends each block with a blank line; a run killed
   // mid-write leaves a last block cut short, which is left out with a note.
   if (text.rfind(kStreamedRecordingMarker, 0) == 0 && !text.ends_with("\n\n")) {
@@ -705,19 +750,20 @@ LoadedReplay parse_replay(const std::string& text, const std::string& origin, co
       throw ReplayError(origin + ":" + std::to_string(line_of(text.size())) +
                         ": the recording ends mid-write within its header (the run was cut off as it started): "
                         "nothing to replay");
-    LoadedReplay out = ScriptReader(origin, base_dir, limits, recorded_scene).read(parse_toml(kept, origin));
+    LoadedReplay out = ScriptReader(origin, base_dir, limits, recorded_scene, response).read(parse_toml(kept, origin));
     out.script.warnings.push_back(origin + ":" + std::to_string(line_of(kept.size())) +
                                   ": the recording ends mid-write here (the run was cut off); replaying its " +
                                   std::to_string(out.script.steps) + " steps up to line " +
                                   std::to_string(line_of(kept.size()) - 1));
     return out;
   }
-  return ScriptReader(origin, base_dir, limits, recorded_scene).read(parse_toml(text, origin));
+  return ScriptReader(origin, base_dir, limits, recorded_scene, response).read(parse_toml(text, origin));
 }
 
-LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits, RecordedScene recorded_scene) {
+LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits, RecordedScene recorded_scene,
+                              std::optional<ContactResponse> response) {
   return parse_replay(read_text_file(path, "replay script"), path, std::filesystem::path(path).parent_path().string(),
-                      limits, recorded_scene);
+                      limits, recorded_scene, response);
 }
 
 }  // namespace ffd

@@ -293,6 +293,54 @@ speed_max_m_s = 0.02
   }
 }
 
+TEST_CASE("Replay scripts: [assert.paper] and [assert.solver] apply under their response only") {
+  const std::string text = script_with(R"(
+[[assert.position]]
+object = "high"
+max = [1, 1, 1]
+[[assert.paper.position]]
+object = "high"
+max = [2, 2, 2]
+[[assert.solver.position]]
+object = "low"
+max = [3, 3, 3]
+[assert.solver.rest]
+speed_max_m_s = 0.5
+)");
+  // The scene's own response (paper): [assert] and [assert.paper].
+  const LoadedReplay paper = parse(text);
+  REQUIRE(paper.script.positions.size() == 2);
+  CHECK(paper.script.positions[1].max == Vec3(2, 2, 2));
+  CHECK_FALSE(paper.script.rest.speed_max_m_s);
+  // The run asked for the solver: [assert] and [assert.solver], and the model says so.
+  const LoadedReplay solver = parse_replay(text, "test.toml", "", {}, RecordedScene::MustMatch, ContactResponse::Solver);
+  CHECK(solver.model.settings.response == ContactResponse::Solver);
+  REQUIRE(solver.script.positions.size() == 2);
+  CHECK(solver.script.positions[1].max == Vec3(3, 3, 3));
+  CHECK(solver.script.rest.speed_max_m_s == 0.5);
+
+  struct Case {
+    const char* what;
+    std::string text;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      // The other response's table is read too: its mistakes are reported whatever the run.
+      {"bad key under the other response", script_with("[[assert.solver.position]]\nobject = \"high\"\nmax = [1, 1, 1]\nevery = 3\n"),
+       "test.toml:7:1: assert.solver.position[0].every: unknown key"},
+      {"unknown response", script_with("[assert.exact.force]\nmax_n = 1.0\n"), "test.toml:4:9: assert.exact: unknown key"},
+      {"a single table twice", script_with("[assert.rest]\nspeed_max_m_s = 1.0\n[assert.paper.rest]\nspeed_max_m_s = 2.0\n"),
+       "test.toml:6:1: assert.paper: [assert.paper.rest] is given in [assert] too"},
+      {"with a response event", script_with("[[event]]\nat_step = 5\nresponse = \"solver\"\n[assert.paper.rest]\nspeed_max_m_s = 2.0\n"),
+       "test.toml:7:1: assert.paper: per-response assertions need one response for the whole run, and the script "
+       "switches the response at step 5"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.what);
+    REQUIRE_THROWS_WITH(parse(c.text), StartsWith(c.message));
+  }
+}
+
 TEST_CASE("Replay: the energy gain and position and rest assertions measure the run") {
   // The upper box falls 4 cm onto the lower one and settles; the probe hovers 15 cm above.
   const LoadedReplay settled = parse(R"(version = 1

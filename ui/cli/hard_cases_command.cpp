@@ -76,11 +76,9 @@ int run_hard_cases_command(const HardCasesOptions& o) {
     std::size_t failed = 0, runs = 0;
     for (const std::string& file : files) {
       for (const std::string& response_text : o.responses) {
-        ffd::LoadedReplay replay = ffd::load_replay_file(file);
-        if (replay.script.recorded)  // as `ffdsim replay --response` refuses it
-          throw std::runtime_error(file + ": a recording replays the response it was recorded with; hard-cases runs "
-                                          "replay scripts under each response (use ffdsim replay)");
-        ffd::response_from_name(response_text, replay.model.settings.response);  // checked by the option
+        ffd::ContactResponse response = ffd::ContactResponse::Paper;
+        ffd::response_from_name(response_text, response);  // checked by the option
+        ffd::LoadedReplay replay = ffd::load_replay_file(file, {}, ffd::RecordedScene::MustMatch, response);
         ffd::ReplayRunOptions run;
         run.pacing = ffd::Pacing::Fast;
         run.check_latency = false;

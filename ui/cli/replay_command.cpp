@@ -44,15 +44,9 @@ int run_replay_command(const ReplayOptions& o) {
     const ffd::RecordedScene recorded = o.scene_from_recording ? ffd::RecordedScene::FromRecording
                                         : o.allow_changed      ? ffd::RecordedScene::AllowChanged
                                                                : ffd::RecordedScene::MustMatch;
-    replay = ffd::load_replay_file(o.script, {}, recorded);
-    if (!o.response.empty()) {
-      if (replay.script.recorded) {
-        std::fprintf(stderr, "ffdsim: error: %s: --response: a recording replays the response it was recorded with\n",
-                     o.script.c_str());
-        return kExitUsage;
-      }
-      ffd::response_from_name(o.response, replay.model.settings.response);  // checked by the option
-    }
+    std::optional<ffd::ContactResponse> response;
+    if (!o.response.empty()) ffd::response_from_name(o.response, response.emplace());  // checked by the option
+    replay = ffd::load_replay_file(o.script, {}, recorded, response);
     if (!o.report_path.empty()) ensure_parent_folder(o.report_path);
     if (o.exports.options().any()) {
       std::vector<std::string> sources;

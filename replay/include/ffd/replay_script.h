@@ -207,10 +207,14 @@ struct LoadedReplay {
 // Reads, validates and resolves a script (object names, grab points, times in ms -> steps).
 // Throws ReplayError (file:line:col: field: problem) for anything wrong, including a scene
 // that does not load or compile.
-// `limits` applies to the script's scene.
+// `limits` applies to the script's scene. `response`, when given, is the contact response
+// the run is under in place of the scene's (a recording refuses it): it decides which of
+// the [assert.paper] / [assert.solver] tables apply.
 LoadedReplay load_replay_file(const std::string& path, const SceneLimits& limits = {},
-                              RecordedScene recorded_scene = RecordedScene::MustMatch);
+                              RecordedScene recorded_scene = RecordedScene::MustMatch,
+                              std::optional<ContactResponse> response = std::nullopt);
 LoadedReplay parse_replay(const std::string& text, const std::string& origin, const std::string& base_dir,
-                          const SceneLimits& limits = {}, RecordedScene recorded_scene = RecordedScene::MustMatch);
+                          const SceneLimits& limits = {}, RecordedScene recorded_scene = RecordedScene::MustMatch,
+                          std::optional<ContactResponse> response = std::nullopt);
 
 }  // namespace ffd
