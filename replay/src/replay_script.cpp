@@ -503,6 +503,7 @@ class ScriptReader {
         ReplayScript unused;
         unused.steps = script.steps;
         unused.commands = script.commands;
+        unused.force_windows = script.force_windows;  // what above_previous compares with
         read_assertion_tables(*section, prefix, kResponseAssertKeys, unused);
       }
     }
@@ -672,7 +673,8 @@ class ScriptReader {
       window.mean_min_n = optional_number(w, "mean_min_n", kNonNegative);
       window.mean_max_n = optional_number(w, "mean_max_n", kNonNegative);
       window.above_previous = w.boolean("above_previous", false);
-      if (window.above_previous && i == 0) w.fail_at("above_previous", "the first force window has none before it");
+      if (window.above_previous && script.force_windows.empty())
+        w.fail_at("above_previous", "the first force window has none before it");
       if (!window.relative_std_max && !window.mean_min_n && !window.mean_max_n && !window.above_previous)
         w.fail_here(path, "give 'relative_std_max', 'mean_min_n', 'mean_max_n' and/or 'above_previous'");
       script.force_windows.push_back(window);

@@ -318,6 +318,20 @@ speed_max_m_s = 0.5
   REQUIRE(solver.script.positions.size() == 2);
   CHECK(solver.script.positions[1].max == Vec3(3, 3, 3));
   CHECK(solver.script.rest.speed_max_m_s == 0.5);
+  // A per-response force window compares with the one in [assert] before it, whatever the run.
+  const std::string windows = script_with(R"(
+[[assert.force_window]]
+from_step = 10
+to_step = 20
+mean_min_n = 0.0
+[[assert.solver.force_window]]
+from_step = 30
+to_step = 40
+above_previous = true
+)");
+  CHECK(parse(windows).script.force_windows.size() == 1);
+  CHECK(parse_replay(windows, "test.toml", "", {}, RecordedScene::MustMatch, ContactResponse::Solver)
+            .script.force_windows.size() == 2);
 
   struct Case {
     const char* what;
