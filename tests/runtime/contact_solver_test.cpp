@@ -83,8 +83,9 @@ Run run(const Model& model, int threads, int steps) {
 TEST_CASE("Determinism: box, plane, probe, surface and grab contacts give the same states on 1, 2 and 8 threads "
           "under both responses, and no allocation",
           "[determinism]") {
-  // Level 2: the boxes' nodes, and the exact edges (edge_contacts, on by default); level 4:
-  // sub-boxes and edges; level 5: the exact surfaces' vertices and edges.
+  // Level 2: the boxes' nodes, and under the paper's response the exact edges (edge_contacts,
+  // on by default); level 4: sub-boxes, and the edges under the paper's response; level 5:
+  // the exact surfaces' vertices, and their edges under the paper's response.
   const auto [response, accuracy] = GENERATE(std::pair{ContactResponse::Solver, Accuracy::CentreOfMass},
                                              std::pair{ContactResponse::Solver, Accuracy::SubBoxes},
                                              std::pair{ContactResponse::Solver, Accuracy::Exact},
