@@ -223,14 +223,18 @@ SurfaceDistance::Query SurfaceDistance::query(const Vec3& point) const {
     if (point[axis] < d.grid_min[axis] - r || point[axis] > d.grid_max[axis] + r) return far;
   }
 
+  // Cells are at least search_radius wide, so [p - r, p + r] meets at most 3 cells along an
+  // axis, and 4 where rounding puts its ends on either side of two cell boundaries (p = 0.3,
+  // r = 0.1 on cells of 0.1: (p - r) / 0.1 = 1.9999999999999998, (p + r) / 0.1 = 4). The
+  // 4 x 4 x 4 below hold that; 3 x 3 x 3 overflowed on the stack. Visiting the cells nearest
+  // first lets the best distance so far prune the rest.
+  constexpr std::int64_t kMostCellsPerAxis = 4;
   std::array<std::int64_t, 3> first{}, last{};
   for (int axis = 0; axis < 3; ++axis) {
     first[axis] = d.cell_coordinate(point[axis] - r, axis);
-    last[axis] = d.cell_coordinate(point[axis] + r, axis);
+    last[axis] = std::min(d.cell_coordinate(point[axis] + r, axis), first[axis] + kMostCellsPerAxis - 1);
   }
-  // Cells are at least search_radius wide, so the range spans at most 3 x 3 x 3 cells.
-  // Visiting them nearest first lets the best distance so far prune the rest.
-  std::array<std::pair<double, std::size_t>, 27> cells{};
+  std::array<std::pair<double, std::size_t>, kMostCellsPerAxis * kMostCellsPerAxis * kMostCellsPerAxis> cells{};
   std::size_t cell_count = 0;
   for (std::int64_t k = first[2]; k <= last[2]; ++k) {
     for (std::int64_t j = first[1]; j <= last[1]; ++j) {

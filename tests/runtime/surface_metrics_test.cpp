@@ -121,6 +121,24 @@ TEST_CASE("SurfaceDistance matches the exact box distance on a grid of points", 
   CHECK(checked > 3000);
 }
 
+TEST_CASE("SurfaceDistance: a query whose search range rounds onto four cells along every axis", "[surface_metrics]") {
+  // A 1 m box from 0 to 1 (the grid starts at 0), cells of the search radius, 0.1 m: around
+  // p = 0.3, (p - 0.1) / 0.1 rounds below 2 and (p + 0.1) / 0.1 to 4, so cells 1 to 4 along
+  // each axis, 64 in all (a 27-cell buffer overflowed on the stack; ASan saw it).
+  SurfaceMesh mesh = ffd::make_box_mesh({1.0, 1.0, 1.0});
+  for (Vec3& v : mesh.vertices) v += Vec3::Constant(0.5);
+  const SurfaceDistance box(mesh, 0.1);
+  REQUIRE(std::floor((0.3 - 0.1) / 0.1) == 1.0);
+  REQUIRE(std::floor((0.3 + 0.1) / 0.1) == 4.0);
+  const SurfaceDistance::Query far = box.query(Vec3(0.3, 0.3, 0.3));  // 0.3 m inside every face
+  CHECK_FALSE(far.within_radius);
+  CHECK(far.distance == 0.1);
+  const SurfaceDistance::Query near = box.query(Vec3(0.3, 0.3, 0.95));  // 5 cm inside the face z = 1
+  REQUIRE(near.within_radius);
+  CHECK(near.distance == Approx(0.05).margin(1e-12));
+  CHECK(near.inside);
+}
+
 TEST_CASE("SurfaceDistance signs in edge and vertex regions of a tetrahedron", "[surface_metrics]") {
   // Face normals here are 109.5 degrees apart: outside points near an edge or a corner are
   // behind some of the faces that share the closest point, so only the pseudo-normal of the
