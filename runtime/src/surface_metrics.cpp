@@ -225,9 +225,9 @@ SurfaceDistance::Query SurfaceDistance::query(const Vec3& point) const {
 
   // Cells are at least search_radius wide, so [p - r, p + r] meets at most 3 cells along an
   // axis, and 4 where rounding puts its ends on either side of two cell boundaries (p = 0.3,
-  // r = 0.1 on cells of 0.1: (p - r) / 0.1 = 1.9999999999999998, (p + r) / 0.1 = 4). The
-  // 4 x 4 x 4 below hold that; 3 x 3 x 3 overflowed on the stack. Visiting the cells nearest
-  // first lets the best distance so far prune the rest.
+  // r = 0.1 on cells of 0.1: (p - r) / 0.1 = 1.9999999999999998, (p + r) / 0.1 = 4), so the
+  // buffer holds 4 x 4 x 4. Visiting the cells nearest first lets the best distance so far
+  // prune the rest.
   constexpr std::int64_t kMostCellsPerAxis = 4;
   std::array<std::int64_t, 3> first{}, last{};
   for (int axis = 0; axis < 3; ++axis) {

@@ -124,7 +124,7 @@ TEST_CASE("SurfaceDistance matches the exact box distance on a grid of points", 
 TEST_CASE("SurfaceDistance: a query whose search range rounds onto four cells along every axis", "[surface_metrics]") {
   // A 1 m box from 0 to 1 (the grid starts at 0), cells of the search radius, 0.1 m: around
   // p = 0.3, (p - 0.1) / 0.1 rounds below 2 and (p + 0.1) / 0.1 to 4, so cells 1 to 4 along
-  // each axis, 64 in all (a 27-cell buffer overflowed on the stack; ASan saw it).
+  // each axis, 64 in all (under ASan, a buffer too small for them is a stack overflow).
   SurfaceMesh mesh = ffd::make_box_mesh({1.0, 1.0, 1.0});
   for (Vec3& v : mesh.vertices) v += Vec3::Constant(0.5);
   const SurfaceDistance box(mesh, 0.1);
