@@ -132,7 +132,7 @@ void project_cell_shape(const Model& model, Index cell, const Mat3& R, double al
 // The stiffness is the object's live value in State::params, so it can be tuned between steps.
 // Gauss-Seidel colour by colour; a colour's springs share no node and go through the SIMD
 // kernel several at a time, with the result of one after the other.
-// A step is: the prediction (here), p.iterations sweeps (sweep_mass_spring), then velocities
+// A step is: the prediction (here), p.iterations sweeps (sweep_dynamics), then velocities
 // from positions (finish_mass_spring). The "paper" response runs them back to back; the
 // "solver" response puts the contacts' projections between the sweeps.
 // The kernel's view of one object's springs at `stiffness`: XPBD's alpha~ = 1 / (k dt^2) and
@@ -182,14 +182,14 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
   return solve;
 }
 
-// One Gauss-Seidel sweep over the object's springs, colour by colour, then its volumes.
-void sweep_mass_spring(const Model& model, const ObjectModel& obj, const SpringSolve& solve, State& state,
-                       DynamicsMemory& memory) {
+bool has_cell_constraints(const ObjectModel& obj) {
+  return obj.tetrahedron_end > obj.tetrahedron_begin || obj.mass_spring.shape_stiffness > 0.0;
+}
+
+// A sweep's second part, after the object's springs (sweep_springs): its volumes, then its
+// cells' shapes, one after the other (they share nodes).
+void project_cell_constraints(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
   const double dt = model.settings.dt;
-  for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
-    const SpringColour& colour = model.spring_colours[c];
-    project_springs(solve, colour.begin, colour.end, colour.independent);
-  }
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
     project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), memory.tetrahedron_lambda[t], state);
   if (obj.mass_spring.shape_stiffness > 0.0) {
@@ -209,13 +209,6 @@ void finish_mass_spring(const Model& model, const ObjectModel& obj, State& state
   if (obj.mass_spring.shape_stiffness > 0.0)
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
       state.cell_shape_force[c] = memory.cell_shape_lambda[c] * inv_dt * inv_dt;
-}
-
-void integrate_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                           DynamicsMemory& memory) {
-  const SpringSolve solve = predict_mass_spring(model, obj, stiffness, state, memory);
-  for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_mass_spring(model, obj, solve, state, memory);
-  finish_mass_spring(model, obj, state, memory);
 }
 
 // Lattice shape matching (Rivers & James 2007, FastLSM, with Mueller et al. 2005
@@ -255,7 +248,167 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
   }
 }
 
+// One sweep of one object: its springs colour by colour, then its volumes and shapes.
+void sweep_object(const Model& model, const ObjectModel& obj, const SpringSolve& solve, State& state,
+                  DynamicsMemory& memory) {
+  for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
+    const SpringColour& colour = model.spring_colours[c];
+    project_springs(solve, colour.begin, colour.end, colour.independent);
+  }
+  project_cell_constraints(model, obj, state, memory);
+}
+
+// Which way a shape-matching object's velocity is finished: under the solver its step (taken
+// at the prediction) is followed by the contacts' corrections, so it is taken from x_prev;
+// under the paper's response its step already set it.
+enum class ShapeMatchingVelocity { Kept, FromPositions };
+
+void finish_object(const Model& model, Index i, State& state, DynamicsMemory& memory,
+                   ShapeMatchingVelocity shape_matching) {
+  const ObjectModel& obj = model.objects[i];
+  if (obj.dynamics == DynamicsKind::MassSpring) {
+    finish_mass_spring(model, obj, state, memory);
+    return;
+  }
+  if (shape_matching == ShapeMatchingVelocity::Kept) return;
+  const double inv_dt = 1.0 / model.settings.dt;
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
+}
+
+void predict_object(const Model& model, Index i, State& state, DynamicsMemory& memory) {
+  const ObjectModel& obj = model.objects[i];
+  if (obj.dynamics == DynamicsKind::MassSpring) {
+    memory.object_solve[i] = predict_mass_spring(model, obj, state.params.stiffness[i], state, memory);
+    return;
+  }
+  for (Index n = obj.node_begin; n < obj.node_end; ++n) memory.x_prev[n] = state.x[n];
+  integrate_shape_matching(model, obj, state.params.stiffness[i], state, memory);
+}
+
+// The step's tasks: the awake objects, largest first; and which way the sweeps go for the
+// pool's thread count: one task per object when the objects, dealt largest first to the
+// least loaded thread, keep every thread within kBalanced of an even share, else stages.
+constexpr double kBalanced = 1.1;
+
+void plan_step(const State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  Index tasks = 0, cell_tasks = 0;
+  for (Index i : memory.objects_by_work) {
+    memory.object_stepping[i] = !state.asleep[i];  // an object asleep is frozen (sleep.h)
+    if (memory.object_stepping[i]) memory.object_tasks[tasks++] = i;
+  }
+  for (Index i : memory.objects_with_cells)
+    if (memory.object_stepping[i]) memory.cell_tasks[cell_tasks++] = i;
+  memory.object_task_count = tasks;
+  memory.cell_task_count = cell_tasks;
+  const int threads = pool ? std::min(pool->threads(), 64) : 1;
+  if (threads == memory.stages_for_threads) return;
+  memory.stages_for_threads = threads;
+  double load[64] = {};
+  double total = 0.0;
+  for (Index i : memory.objects_by_work) {
+    *std::min_element(load, load + threads) += memory.object_work[i];
+    total += memory.object_work[i];
+  }
+  memory.use_stages = threads > 1 && *std::max_element(load, load + threads) > kBalanced * total / threads;
+}
+
+// Cuts every stage's segments into chunks of about this many springs: a chunk of a large
+// object's colour is about a microsecond of work, a few times a stage's wait.
+constexpr Index kChunkSprings = 128;  // a multiple of the kernel's 4 lanes
+
+void schedule_springs(const Model& model, DynamicsMemory& memory) {
+  memory.spring_segments.clear();
+  memory.chunk_first_segment.clear();
+  memory.stage_first_chunk.clear();
+  Index stages = 0;
+  for (const ObjectModel& obj : model.objects)
+    if (obj.dynamics == DynamicsKind::MassSpring) stages = std::max(stages, obj.colour_end - obj.colour_begin);
+  for (Index stage = 0; stage < stages; ++stage) {
+    memory.stage_first_chunk.push_back(static_cast<Index>(memory.chunk_first_segment.size()));
+    Index in_chunk = 0;  // springs in the open chunk
+    const auto add = [&](Index object, Index begin, Index end, bool independent) {
+      if (memory.chunk_first_segment.size() == memory.stage_first_chunk.back() || in_chunk + (end - begin) > kChunkSprings) {
+        memory.chunk_first_segment.push_back(static_cast<Index>(memory.spring_segments.size()));
+        in_chunk = 0;
+      }
+      memory.spring_segments.push_back(DynamicsMemory::SpringSegment{object, begin, end, independent});
+      in_chunk += end - begin;
+    };
+    for (Index o = 0; o < model.objects.size(); ++o) {
+      const ObjectModel& obj = model.objects[o];
+      if (obj.dynamics != DynamicsKind::MassSpring || stage >= obj.colour_end - obj.colour_begin) continue;
+      const SpringColour& colour = model.spring_colours[obj.colour_begin + stage];
+      if (!colour.independent) {  // its springs one after the other: one segment
+        add(o, colour.begin, colour.end, false);
+        continue;
+      }
+      for (Index begin = colour.begin; begin < colour.end; begin += kChunkSprings)
+        add(o, begin, std::min(colour.end, begin + kChunkSprings), true);
+    }
+  }
+  memory.stage_first_chunk.push_back(static_cast<Index>(memory.chunk_first_segment.size()));
+  memory.chunk_first_segment.push_back(static_cast<Index>(memory.spring_segments.size()));
+  const std::size_t chunks = memory.chunk_first_segment.size() - 1;
+  memory.chunk_claim = std::make_unique<std::atomic<std::uint64_t>[]>(chunks);
+  for (std::size_t c = 0; c < chunks; ++c) memory.chunk_claim[c].store(0, std::memory_order_relaxed);
+  memory.stage_done = std::make_unique<DynamicsMemory::StageDone[]>(static_cast<std::size_t>(dynamics_iterations(model)) * stages);
+  memory.pass = 0;
+}
+
+// The volumes and shapes of sweep `iteration`, one task per object that has them.
+void sweep_cells(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  parallel_for(pool, memory.cell_task_count, [&](std::uint32_t task, std::uint32_t) {
+    const ObjectModel& obj = model.objects[memory.cell_tasks[task]];
+    if (iteration < obj.mass_spring.iterations) project_cell_constraints(model, obj, state, memory);
+  });
+}
+
 }  // namespace
+
+void sweep_springs(const Model& model, int first, int last, DynamicsMemory& memory, WorkerPool* pool) {
+  const Index stages = static_cast<Index>(memory.stage_first_chunk.size()) - 1;
+  if (stages <= 0 || last <= first) return;
+  const auto project_chunk = [&](int iteration, Index chunk) {
+    for (Index g = memory.chunk_first_segment[chunk]; g < memory.chunk_first_segment[chunk + 1]; ++g) {
+      const DynamicsMemory::SpringSegment& segment = memory.spring_segments[g];
+      if (memory.object_stepping[segment.object] && iteration < model.objects[segment.object].mass_spring.iterations)
+        project_springs(memory.object_solve[segment.object], segment.begin, segment.end, segment.independent);
+    }
+  };
+  DynamicsMemory::StageDone* done = memory.stage_done.get();
+  const std::size_t passes = static_cast<std::size_t>(last - first) * stages;
+  for (std::size_t k = 0; k < passes; ++k) done[k].chunks.store(0, std::memory_order_relaxed);  // published by the job
+  const std::uint64_t first_pass = memory.pass + 1;
+  memory.pass += passes;
+  const std::uint32_t threads = pool ? static_cast<std::uint32_t>(pool->threads()) : 1u;
+  const auto take_part = [&](std::uint32_t part, std::uint32_t) {
+    int spins = 0;
+    for (std::size_t k = 0; k < passes; ++k) {
+      const int iteration = first + static_cast<int>(k / stages);
+      const Index stage = static_cast<Index>(k % stages);
+      const Index chunk_begin = memory.stage_first_chunk[stage];
+      const std::uint32_t chunks = memory.stage_first_chunk[stage + 1] - chunk_begin;
+      const std::uint64_t pass = first_pass + k;
+      std::uint32_t claimed = 0;
+      const auto claim = [&](std::uint32_t c) {
+        std::atomic<std::uint64_t>& flag = memory.chunk_claim[chunk_begin + c];
+        std::uint64_t last_pass = flag.load(std::memory_order_relaxed);
+        // A thread left behind in an earlier pass (every chunk done without it) finds the
+        // chunks claimed in that pass or a later one and claims none.
+        if (last_pass >= pass || !flag.compare_exchange_strong(last_pass, pass, std::memory_order_relaxed)) return;
+        project_chunk(iteration, chunk_begin + c);
+        ++claimed;
+      };
+      const std::uint32_t start = static_cast<std::uint32_t>(std::uint64_t{part} * chunks / threads);
+      for (std::uint32_t c = start; c < chunks; ++c) claim(c);
+      for (std::uint32_t c = start; c-- > 0;) claim(c);
+      // release / acquire on the count hands the stage's nodes on to the next stage
+      if (claimed > 0) done[k].chunks.fetch_add(claimed, std::memory_order_acq_rel);
+      while (done[k].chunks.load(std::memory_order_acquire) < chunks) spin_wait(spins);
+    }
+  };
+  parallel_for(pool, threads, take_part);
+}
 
 void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
   memory.x_prev.resize(model.node_count());
@@ -285,43 +438,52 @@ void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
                    [&](Index a, Index b) { return memory.object_work[a] > memory.object_work[b]; });
   memory.object_tasks.resize(model.objects.size());
   memory.goal_sum.resize(model.regions.empty() ? 0 : model.node_count());
+  schedule_springs(model, memory);
+  memory.object_solve.resize(model.objects.size());
+  memory.object_stepping.assign(model.objects.size(), 0);
+  memory.objects_with_cells.clear();
+  for (Index i : memory.objects_by_work)
+    if (model.objects[i].dynamics == DynamicsKind::MassSpring && has_cell_constraints(model.objects[i]))
+      memory.objects_with_cells.push_back(i);
+  memory.cell_tasks.resize(memory.objects_with_cells.size());
+  memory.stages_for_threads = 0;
 }
 
 void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
-  // Objects are independent: one task each, the largest first, spread over the pool. Each
-  // object's result is the same whichever thread solves it.
-  Index tasks = 0;
-  for (Index i : memory.objects_by_work)
-    if (!state.asleep[i]) memory.object_tasks[tasks++] = i;  // an object asleep is frozen (sleep.h)
-  auto integrate = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = memory.object_tasks[task];
-    const ObjectModel& obj = model.objects[i];
-    const double stiffness = state.params.stiffness[i];
-    if (obj.dynamics == DynamicsKind::MassSpring) integrate_mass_spring(model, obj, stiffness, state, memory);
-    else integrate_shape_matching(model, obj, stiffness, state, memory);
-  };
-  parallel_for(pool, tasks, integrate);
+  plan_step(state, memory, pool);
+  if (!memory.use_stages) {  // one task per object, its whole step in it
+    parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+      const Index i = memory.object_tasks[task];
+      const ObjectModel& obj = model.objects[i];
+      predict_object(model, i, state, memory);
+      if (obj.dynamics == DynamicsKind::MassSpring)
+        for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_object(model, obj, memory.object_solve[i], state, memory);
+      finish_object(model, i, state, memory, ShapeMatchingVelocity::Kept);
+    });
+    return;
+  }
+  parallel_for(pool, memory.object_task_count,
+               [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
+  const int iterations = dynamics_iterations(model);
+  if (memory.cell_task_count == 0) {
+    sweep_springs(model, 0, iterations, memory, pool);  // every sweep in one job
+  } else {
+    for (int it = 0; it < iterations; ++it) {
+      sweep_springs(model, it, it + 1, memory, pool);
+      sweep_cells(model, it, state, memory, pool);
+    }
+  }
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    finish_object(model, memory.object_tasks[task], state, memory, ShapeMatchingVelocity::Kept);
+  });
 }
 
-// The "solver" response's share of the dynamics (contact_solver.cpp runs the step around it).
-// Every object's prediction; a shape-matching object takes its whole step here (it has no
-// sweeps), its start kept in x_prev so that finish_dynamics gives it its contacts' velocity.
+// Every awake object's prediction, one task each, the largest first; a shape-matching object
+// takes its whole step here (it has no sweeps), its start kept in x_prev.
 void predict_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
-  Index tasks = 0;
-  for (Index i : memory.objects_by_work)
-    if (!state.asleep[i]) memory.object_tasks[tasks++] = i;
-  memory.object_task_count = tasks;
-  auto predict = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = memory.object_tasks[task];
-    const ObjectModel& obj = model.objects[i];
-    if (obj.dynamics == DynamicsKind::MassSpring) {
-      predict_mass_spring(model, obj, state.params.stiffness[i], state, memory);
-      return;
-    }
-    for (Index n = obj.node_begin; n < obj.node_end; ++n) memory.x_prev[n] = state.x[n];
-    integrate_shape_matching(model, obj, state.params.stiffness[i], state, memory);
-  };
-  parallel_for(pool, tasks, predict);
+  plan_step(state, memory, pool);
+  parallel_for(pool, memory.object_task_count,
+               [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
 }
 
 int dynamics_iterations(const Model& model) {
@@ -332,27 +494,23 @@ int dynamics_iterations(const Model& model) {
 }
 
 void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool) {
-  auto sweep = [&](std::uint32_t task, std::uint32_t) {
+  if (memory.use_stages) {
+    sweep_springs(model, iteration, iteration + 1, memory, pool);
+    sweep_cells(model, iteration, state, memory, pool);
+    return;
+  }
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
     const Index i = memory.object_tasks[task];
     const ObjectModel& obj = model.objects[i];
     if (obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations)
-      sweep_mass_spring(model, obj, spring_solve(model, obj, state.params.stiffness[i], state, memory), state, memory);
-  };
-  parallel_for(pool, memory.object_task_count, sweep);
+      sweep_object(model, obj, memory.object_solve[i], state, memory);
+  });
 }
 
 void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
-  auto finish = [&](std::uint32_t task, std::uint32_t) {
-    const Index i = memory.object_tasks[task];
-    const ObjectModel& obj = model.objects[i];
-    if (obj.dynamics == DynamicsKind::MassSpring) {
-      finish_mass_spring(model, obj, state, memory);
-      return;
-    }
-    const double inv_dt = 1.0 / model.settings.dt;
-    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
-  };
-  parallel_for(pool, memory.object_task_count, finish);
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    finish_object(model, memory.object_tasks[task], state, memory, ShapeMatchingVelocity::FromPositions);
+  });
 }
 
 }  // namespace ffd

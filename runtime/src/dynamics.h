@@ -1,10 +1,14 @@
 #pragma once
 // Internal dynamics of the lattice nodes, per object: XPBD mass-spring or lattice shape
 // matching. Both are unconditionally stable at any stiffness for the fixed step.
+#include <atomic>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "ffd/model.h"
 #include "ffd/state.h"
+#include "kernels/spring_kernels.h"
 
 namespace ffd {
 
@@ -27,6 +31,43 @@ struct DynamicsMemory {
   std::vector<Index> objects_by_work;
   std::vector<Index> object_tasks;
   Index object_task_count = 0;
+  // How the objects share the pool. When they balance over its threads (two teapots on two,
+  // a thousand letters) each object is one task, its whole step in it. When they do not (one
+  // Buddha, five bunnies on two threads) the sweeps' springs go stage by stage, as Box2D v3
+  // solves its constraint colours: stage c holds colour c of every mass-spring object, cut
+  // into chunks of about kChunkSprings springs. A colour's springs share no node and two
+  // objects share none, so a stage's chunks give the same bits on any thread in any order,
+  // and both ways give the same bits. A segment is one object's springs [begin, end) of one
+  // colour.
+  struct SpringSegment {
+    Index object, begin, end;
+    bool independent;  // SpringColour::independent
+  };
+  std::vector<SpringSegment> spring_segments;
+  std::vector<Index> chunk_first_segment;  // per chunk, then one past the last
+  std::vector<Index> stage_first_chunk;    // per stage, then one past the last
+  // Claiming the chunks (Box2D v3's b2ExecuteMainStage): each thread of the job starts at its
+  // share of a stage's chunks and goes forward, then back, claiming each chunk not yet claimed
+  // in this pass, so a thread keeps to the same part of the lattice from stage to stage (its
+  // nodes stay in its cache) and takes over the rest when another is slow; then it waits
+  // until the stage's chunks are all done. A thread that never comes (asleep, late) is not
+  // waited for. `chunk_claim` holds the pass a chunk was last claimed in (passes are counted
+  // in `pass` and never repeat); `stage_done`, per stage of a job, the chunks done.
+  struct alignas(64) StageDone {
+    std::atomic<std::uint32_t> chunks{0};
+  };
+  std::unique_ptr<std::atomic<std::uint64_t>[]> chunk_claim;
+  std::unique_ptr<StageDone[]> stage_done;
+  std::uint64_t pass = 0;
+  std::vector<SpringSolve> object_solve;      // per object: its springs' view, set by the prediction
+  std::vector<std::uint8_t> object_stepping;  // per object: awake at the prediction (1)
+  // The mass-spring objects with volumes or shape constraints, projected object by object
+  // after the springs in the stages (their constraints share nodes); the stepping ones.
+  std::vector<Index> objects_with_cells;
+  std::vector<Index> cell_tasks;
+  Index cell_task_count = 0;
+  int stages_for_threads = 0;  // the thread count `use_stages` was decided for (0: none yet)
+  bool use_stages = false;
   std::vector<Vec3> goal_sum;  // shape matching: summed goal positions per node
 };
 void size_dynamics_memory(const Model& model, DynamicsMemory& memory);
@@ -44,6 +85,9 @@ void predict_dynamics(const Model& model, State& state, DynamicsMemory& memory, 
 int dynamics_iterations(const Model& model);  // the most sweeps an object asks for
 void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool);
 void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
+// Sweeps [first, last) of every object's springs alone, stage by stage (sweep_dynamics adds
+// the volumes and shapes).
+void sweep_springs(const Model& model, int first, int last, DynamicsMemory& memory, WorkerPool* pool);
 
 // Rotation part of A (Mueller et al. 2016, "A Robust Method to Extract the Rotational Part
 // of Deformations"), iterated from `q`, which is updated in place. Never NaN: a degenerate A
