@@ -263,4 +263,14 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
   report.total_ns = now_ns() - start;
 }
 
+double time_spring_sweeps(const Model& model, const State& state, int sweeps) {
+  State copy = state;
+  DynamicsMemory memory;
+  size_dynamics_memory(model, memory);
+  predict_dynamics(model, copy, memory, nullptr);
+  const auto start = std::chrono::steady_clock::now();
+  for (int sweep = 0; sweep < sweeps; ++sweep) sweep_springs(model, 0, 1, memory, nullptr);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace ffd

@@ -45,3 +45,43 @@ TEST_CASE("bench table: a row per response, the steps listed once, per-element c
   CHECK(json[0].at("response") == "paper");
   CHECK(json[1].at("response") == "solver");
 }
+
+TEST_CASE("bench --compare: a scene more than 25 % slower than the reference fails, naming it and its stage", "[bench]") {
+  ffdbench::ScenarioResult before = row(ffd::ContactResponse::Paper, 0.78);
+  before.parallel.step_p50_ms = 0.40;
+  before.parallel.step_mean_ms = 0.42;
+  before.parallel.collision_mean_ms = 0.20;
+  before.parallel.box_update_mean_ms = 0.05;
+  before.parallel.dynamics_mean_ms = 0.15;
+  const nlohmann::json reference = {{"machine", {{"cpu", "test CPU"}}}, {"scenarios", ffdbench::to_json({before})}};
+
+  ffdbench::ScenarioResult after = before;
+  after.parallel.step_p50_ms = 0.48;  // 20 % slower: within
+  ffdbench::Comparison c = ffdbench::compare_to_reference({after}, reference, "test CPU", "ref.json");
+  CHECK(c.compared);
+  CHECK(c.failures.empty());
+  REQUIRE(c.lines.size() == 1);
+  CHECK_THAT(c.lines[0], Catch::Contains("teapots (paper)") && Catch::Contains(": ok"));
+
+  after.parallel.step_p50_ms = 0.52;  // 30 % slower, the dynamics 0.1 ms of it
+  after.parallel.dynamics_mean_ms = 0.25;
+  after.parallel.step_mean_ms = 0.52;
+  c = ffdbench::compare_to_reference({after}, reference, "test CPU", "ref.json");
+  REQUIRE(c.failures.size() == 1);
+  CHECK_THAT(c.failures[0], Catch::Contains("teapots (paper)") && Catch::Contains("SLOWER by 30 %") &&
+                                Catch::Contains("dynamics, +0.100 ms"));
+
+  // Another CPU model: nothing compared, nothing failed.
+  c = ffdbench::compare_to_reference({after}, reference, "other CPU", "ref.json");
+  CHECK_FALSE(c.compared);
+  CHECK(c.reference_cpu == "test CPU");
+  CHECK(c.failures.empty());
+
+  // Not a bench.json, or one without the p50: an error naming the file and the field.
+  CHECK_THROWS_WITH(ffdbench::compare_to_reference({after}, nlohmann::json::array(), "test CPU", "ref.json"),
+                    Catch::Contains("ref.json: not a bench.json"));
+  nlohmann::json old = reference;
+  old["scenarios"][0]["threads"][1].erase("step_p50_ms");
+  CHECK_THROWS_WITH(ffdbench::compare_to_reference({after}, old, "test CPU", "ref.json"),
+                    Catch::Contains("ref.json: scenarios[0].threads[1].step_p50_ms"));
+}

@@ -7,8 +7,11 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <iterator>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "ffd/command.h"
 #include "ffd/scene_loader.h"
@@ -152,6 +155,7 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
   run.collision_mean_ms = mean(collision_ms);
   run.collision_p99_ms = percentile(collision_ms, 0.99);
   run.step_mean_ms = mean(step_ms);
+  run.step_p50_ms = percentile(step_ms, 0.50);
   run.step_p99_ms = percentile(step_ms, 0.99);
   run.dynamics_mean_ms = mean(dynamics_ms);
   run.box_update_mean_ms = mean(box_ms);
@@ -200,8 +204,12 @@ ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scena
   result.step_p99_ms = result.single.step_p99_ms;
   result.dynamics_mean_ms = result.single.dynamics_mean_ms;
   result.state_hash = result.single.state_hash;
-  if (result.spring_projections > 0)
-    result.ns_per_spring_projection = result.single.dynamics_mean_ms * 1e6 / static_cast<double>(result.spring_projections);
+  if (result.springs > 0) {
+    // About 0.2 s of sweeps (20 at the least): long beside the clock, short beside the run.
+    const int sweeps = std::max(20, static_cast<int>(4.0e7 / static_cast<double>(result.springs)));
+    const double seconds = ffd::time_spring_sweeps(model, ffd::initial_state(model), sweeps);
+    result.ns_per_spring_projection = seconds * 1e9 / (static_cast<double>(result.springs) * sweeps);
+  }
   if (result.boxes > 0) result.ns_per_box_update = result.single.box_update_mean_ms * 1e6 / static_cast<double>(result.boxes);
   return result;
 }
@@ -271,8 +279,8 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
       << met(r.ns_per_spring_projection, 1.5) << " | " << thousands(static_cast<double>(r.boxes)) << " | "
       << fixed(r.ns_per_box_update, 1) << met(r.ns_per_box_update, 15.0) << " |\n";
   }
-  s << "\nUnder the response `paper` (under `solver` the springs are solved with the contacts). A spring projection: "
-       "the dynamics stage (prediction, projections, velocities) over springs × iterations. "
+  s << "\nA spring projection: the springs alone, every spring of the scene swept over and over from its start "
+       "on one thread (the prediction, volumes, shapes and velocities left out). "
        "An FFD AABB update: eq. 2 for its 9 nodes and its world AABB.\n";
   return s.str();
 }
@@ -280,7 +288,8 @@ std::string markdown_table(const std::vector<ScenarioResult>& results, const std
 namespace {
 nlohmann::json thread_json(const ThreadRun& r) {
   return {{"threads", r.threads},          {"collision_mean_ms", r.collision_mean_ms}, {"collision_p99_ms", r.collision_p99_ms},
-          {"step_mean_ms", r.step_mean_ms}, {"step_p99_ms", r.step_p99_ms},           {"dynamics_mean_ms", r.dynamics_mean_ms},
+          {"step_mean_ms", r.step_mean_ms}, {"step_p50_ms", r.step_p50_ms},           {"step_p99_ms", r.step_p99_ms},
+          {"dynamics_mean_ms", r.dynamics_mean_ms}, {"box_update_mean_ms", r.box_update_mean_ms},
           {"state_hash", r.state_hash}};
 }
 }  // namespace
@@ -322,6 +331,84 @@ nlohmann::json to_json(const std::vector<ScenarioResult>& results) {
                     {"ns_per_box_update", r.ns_per_box_update}});
   }
   return rows;
+}
+
+namespace {
+
+// reference[key] as a number, or an error naming the source and where.
+double number_at(const nlohmann::json& object, const char* key, const std::string& source, const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end() || !it->is_number())
+    throw std::runtime_error(source + ": " + where + "." + key + ": missing or not a number (a bench.json written by " +
+                             "`ffdsim bench` is expected; run it again to write one)");
+  return it->get<double>();
+}
+
+}  // namespace
+
+Comparison compare_to_reference(const std::vector<ScenarioResult>& results, const nlohmann::json& reference,
+                                const std::string& cpu, const std::string& source) {
+  Comparison out;
+  const auto machine = reference.find("machine");
+  if (!reference.is_object() || machine == reference.end() || !machine->is_object() || !machine->contains("cpu") ||
+      !(*machine)["cpu"].is_string() || !reference.contains("scenarios") || !reference["scenarios"].is_array())
+    throw std::runtime_error(source + ": not a bench.json (machine.cpu and scenarios expected)");
+  out.reference_cpu = (*machine)["cpu"].get<std::string>();
+  if (out.reference_cpu != cpu) return out;
+  out.compared = true;
+  const nlohmann::json& rows = reference["scenarios"];
+  for (const ScenarioResult& r : results) {
+    const std::string response = ffd::response_name(r.response);
+    const nlohmann::json* found = nullptr;
+    std::string where;
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      if (rows[i].value("scenario", "") == r.scenario.key && rows[i].value("response", "") == response) {
+        found = &rows[i];
+        where = "scenarios[" + std::to_string(i) + "]";
+      }
+    const std::string row = r.scenario.key + " (" + response + ")";
+    if (!found) {
+      out.lines.push_back(row + ": not in " + source + ", not compared");
+      continue;
+    }
+    const auto threads = found->find("threads");
+    if (threads == found->end() || !threads->is_array() || threads->empty())
+      throw std::runtime_error(source + ": " + where + ".threads: missing or empty");
+    const nlohmann::json& ref = threads->back();
+    where += ".threads[" + std::to_string(threads->size() - 1) + "]";
+    const ThreadRun& now = r.parallel;
+    const double ref_p50 = number_at(ref, "step_p50_ms", source, where);
+    char text[256];
+    if (!(now.step_p50_ms > (1.0 + kSlowerAllowed) * ref_p50)) {
+      std::snprintf(text, sizeof text, "%s: whole step p50 %.3f ms on %d threads, reference %.3f ms: ok", row.c_str(),
+                    now.step_p50_ms, now.threads, ref_p50);
+      out.lines.push_back(text);
+      continue;
+    }
+    // The stage that grew the most, in ms per step (means: a stage's p50 is not measured).
+    const double dynamics = now.dynamics_mean_ms - number_at(ref, "dynamics_mean_ms", source, where);
+    const double boxes = now.box_update_mean_ms - number_at(ref, "box_update_mean_ms", source, where);
+    const double collision = (now.collision_mean_ms - now.box_update_mean_ms) -
+                             (number_at(ref, "collision_mean_ms", source, where) -
+                              number_at(ref, "box_update_mean_ms", source, where));
+    const double rest = (now.step_mean_ms - now.collision_mean_ms - now.dynamics_mean_ms) -
+                        (number_at(ref, "step_mean_ms", source, where) -
+                         number_at(ref, "collision_mean_ms", source, where) - number_at(ref, "dynamics_mean_ms", source, where));
+    const std::pair<double, const char*> stages[] = {{dynamics, "dynamics"},
+                                                     {boxes, "FFD AABB update"},
+                                                     {collision, "broad and narrow phase, planes"},
+                                                     {rest, "the rest of the step (contact solve, sleep, measures)"}};
+    const auto grew = *std::max_element(std::begin(stages), std::end(stages),
+                                        [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::snprintf(text, sizeof text,
+                  "%s: whole step p50 %.3f ms on %d threads, reference %.3f ms: SLOWER by %.0f %% (more than %.0f %%); "
+                  "the stage that grew the most: %s, +%.3f ms per step",
+                  row.c_str(), now.step_p50_ms, now.threads, ref_p50, 100.0 * (now.step_p50_ms / ref_p50 - 1.0),
+                  100.0 * kSlowerAllowed, grew.second, grew.first);
+    out.lines.push_back(text);
+    out.failures.push_back(text);
+  }
+  return out;
 }
 
 }  // namespace ffdbench

@@ -39,7 +39,7 @@ const std::vector<Scenario>& paper_scenarios();
 struct ThreadRun {
   int threads = 1;
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
-  double step_mean_ms = 0, step_p99_ms = 0;            // the whole step, dynamics included
+  double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
   double dynamics_mean_ms = 0, box_update_mean_ms = 0;
   std::string state_hash;                              // after the last step
 };
@@ -53,7 +53,7 @@ struct ScenarioResult {
   // The first run (1 thread), whose figures are also these fields, and the second (the
   // bench's thread count; the same states, the hashes must agree).
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
-  double step_mean_ms = 0, step_p99_ms = 0;            // the whole step, dynamics included
+  double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
   double dynamics_mean_ms = 0;
   ThreadRun single, parallel;
   // Per element on 1 thread: the dynamics stage over its spring projections (springs x
@@ -95,5 +95,21 @@ std::string cpu_description();
 // The table as Markdown (with the machine and how it was measured) and as JSON.
 std::string markdown_table(const std::vector<ScenarioResult>& results, const std::string& cpu, bool quick);
 nlohmann::json to_json(const std::vector<ScenarioResult>& results);
+
+// `ffdsim bench --compare`: each row of `results` against the row of the same scenario and
+// response in `reference` (a bench.json; `source` names it in messages), when `reference`
+// was measured on `cpu`. A row whose whole-step p50 on the most threads is more than
+// kSlowerAllowed above the reference's fails; its message names the scene, the response and
+// the stage that grew the most. Throws std::runtime_error on a reference that is not a
+// bench.json (the message names `source` and the field).
+inline constexpr double kSlowerAllowed = 0.25;
+struct Comparison {
+  bool compared = false;          // false: the reference was measured on another CPU model
+  std::string reference_cpu;
+  std::vector<std::string> lines;     // one per row compared, "ok" or "SLOWER"
+  std::vector<std::string> failures;  // the rows more than kSlowerAllowed slower
+};
+Comparison compare_to_reference(const std::vector<ScenarioResult>& results, const nlohmann::json& reference,
+                                const std::string& cpu, const std::string& source);
 
 }  // namespace ffdbench

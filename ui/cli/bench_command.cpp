@@ -36,6 +36,10 @@ void register_bench(CLI::App& app, BenchOptions& o) {
                   "uses the paper's")
       ->check(CLI::IsMember({"paper", "solver"}))
       ->capture_default_str();
+  cmd->add_option("--compare", o.compare,
+                  "A bench.json (docs/results/bench.json): exit 4 when a scene's whole-step p50 is more than 25 % above "
+                  "it, naming the scene and the stage (compared only if measured on the same CPU model)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet,-q", o.quiet, "No progress bars");
 }
 
@@ -53,6 +57,13 @@ int run_bench(const BenchOptions& o) {
       if (o.only.empty() || std::find(o.only.begin(), o.only.end(), s.key) != o.only.end()) chosen.push_back(s);
     if (!o.results_page.empty()) check_results_page(o.results_page);  // before minutes of benchmarking
     ensure_folder(o.out_dir);
+    nlohmann::json reference;
+    if (!o.compare.empty()) {  // read before minutes of benchmarking too
+      std::ifstream in(o.compare);
+      reference = nlohmann::json::parse(in, nullptr, false);
+      if (reference.is_discarded()) throw std::runtime_error(o.compare + ": not valid JSON");
+      ffdbench::compare_to_reference({}, reference, ffdbench::cpu_description(), o.compare);  // its shape
+    }
 
     const std::string cpu = ffdbench::cpu_description();
     ProgressBar progress("ffdsim bench", o.quiet);
@@ -102,6 +113,8 @@ int run_bench(const BenchOptions& o) {
     write_file(std::filesystem::path(o.out_dir) / "bench.json", json.dump(2) + "\n");
     std::printf("%s\n%s", table.c_str(), race_table.c_str());
     if (!o.results_page.empty()) {
+      // The reference for --compare, beside the page: docs/results/bench.json.
+      write_file(std::filesystem::path(o.results_page).replace_extension(".json"), json.dump(2) + "\n");
       write_results_page(o.results_page, "Speed: the paper's Table 1 beside ours", cpu,
                          "## Collision handling and the whole step\n\n" + table + "\n## Broad-phase race against FCL\n\n" +
                              race_table);
@@ -109,7 +122,16 @@ int run_bench(const BenchOptions& o) {
     }
     std::fprintf(stderr, "ffdsim bench: wrote %s/table.md and %s/bench.json\n", o.out_dir.c_str(), o.out_dir.c_str());
     if (!finite) return kExitRuntime;
-    return missing ? kExitAssertionFailed : kExitOk;
+    bool slower = false;
+    if (!o.compare.empty()) {
+      const ffdbench::Comparison c = ffdbench::compare_to_reference(results, reference, cpu, o.compare);
+      if (!c.compared)
+        std::fprintf(stderr, "ffdsim bench: --compare: nothing compared: %s was measured on %s, this is %s\n",
+                     o.compare.c_str(), c.reference_cpu.c_str(), cpu.c_str());
+      for (const std::string& line : c.lines) std::fprintf(stderr, "ffdsim bench: --compare: %s\n", line.c_str());
+      slower = !c.failures.empty();
+    }
+    return missing || slower ? kExitAssertionFailed : kExitOk;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
     return kExitBadInput;

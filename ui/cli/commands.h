@@ -97,6 +97,7 @@ struct BenchOptions {
   int repetitions = 20;
   int threads = 0;                // the second thread count of every row (the first is 1)
   std::vector<std::string> responses = {"paper", "solver"};  // contact responses, a row each (spec.h)
+  std::string compare;            // --compare: a bench.json to hold the whole-step p50s against
   bool quiet = false;
 };
 void register_bench(CLI::App& app, BenchOptions& options);

@@ -100,6 +100,11 @@ void step(const Model& model, State& state, Scratch& scratch, StepReport& report
 // this CPU has, chosen at run time. Every target gives the same bits.
 const char* simd_target_name();
 
+// The springs alone, for the bench's cost of one spring projection: `sweeps` XPBD sweeps of
+// every awake mass-spring object's springs from `state` (a copy is changed, not it), on this
+// thread, without the prediction, volumes, shapes or velocities. Returns the seconds.
+double time_spring_sweeps(const Model& model, const State& state, int sweeps);
+
 // Recomputes the nodes of every box of the State's accuracy level from the lattice (eq. 2),
 // for tools that need the boxes of a State (frames, tests).
 void update_all_boxes(const Model& model, const State& state, Scratch& scratch);
