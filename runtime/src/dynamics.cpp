@@ -137,14 +137,13 @@ void project_cell_shape(const Model& model, Index cell, const Mat3& R, double al
 // "solver" response puts the contacts' projections between the sweeps.
 // The kernel's view of one object's springs at `stiffness`: XPBD's alpha~ = 1 / (k dt^2) and
 // the damping term gamma = c / (k dt).
-SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, State& state, DynamicsMemory& memory) {
+SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, DynamicsMemory& memory) {
   const double dt = model.settings.dt;
   const double compliance = 1.0 / stiffness;            // m/N
   const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
   const double gamma = compliance * obj.mass_spring.damping / dt;  // XPBD damping term
-  return SpringSolve{state.x.data()->data(),
-                     memory.x_prev.data()->data(),
-                     model.node_inv_mass.data(),
+  return SpringSolve{memory.node_record.get(),
+                     memory.start_record.get(),
                      model.spring_node_a.data(),
                      model.spring_node_b.data(),
                      model.spring_rest_length.data(),
@@ -162,8 +161,9 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     memory.x_prev[n] = state.x[n];
     state.x[n] += dt * state.v[n];  // prediction
+    std::copy_n(memory.x_prev[n].data(), 3, memory.start_record.get() + kNodeRecord * n);
   }
-  const SpringSolve solve = spring_solve(model, obj, stiffness, state, memory);
+  const SpringSolve solve = spring_solve(model, obj, stiffness, memory);
   const std::size_t object = &obj - model.objects.data();
   if (memory.denominator_stiffness[object] != stiffness) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
@@ -180,6 +180,16 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
     fit_cell_rotations(model, obj, state, memory);
   }
   return solve;
+}
+
+// The object's positions into the kernel's node records (kNodeRecord), and back.
+void nodes_to_records(const ObjectModel& obj, const State& state, DynamicsMemory& memory) {
+  for (Index n = obj.node_begin; n < obj.node_end; ++n)
+    std::copy_n(state.x[n].data(), 3, memory.node_record.get() + kNodeRecord * n);
+}
+void records_to_nodes(const ObjectModel& obj, State& state, const DynamicsMemory& memory) {
+  for (Index n = obj.node_begin; n < obj.node_end; ++n)
+    std::copy_n(memory.node_record.get() + kNodeRecord * n, 3, state.x[n].data());
 }
 
 bool has_cell_constraints(const ObjectModel& obj) {
@@ -248,14 +258,18 @@ void integrate_shape_matching(const Model& model, const ObjectModel& obj, double
   }
 }
 
-// One sweep of one object: its springs colour by colour, then its volumes and shapes.
+// One sweep of one object: its springs colour by colour on the node records, then, on the
+// positions, its volumes and shapes. The records hold the positions before and after.
 void sweep_object(const Model& model, const ObjectModel& obj, const SpringSolve& solve, State& state,
                   DynamicsMemory& memory) {
   for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
     const SpringColour& colour = model.spring_colours[c];
     project_springs(solve, colour.begin, colour.end, colour.independent);
   }
+  if (!has_cell_constraints(obj)) return;
+  records_to_nodes(obj, state, memory);
   project_cell_constraints(model, obj, state, memory);
+  nodes_to_records(obj, state, memory);
 }
 
 // Which way a shape-matching object's velocity is finished: under the solver its step (taken
@@ -267,6 +281,9 @@ void finish_object(const Model& model, Index i, State& state, DynamicsMemory& me
                    ShapeMatchingVelocity shape_matching) {
   const ObjectModel& obj = model.objects[i];
   if (obj.dynamics == DynamicsKind::MassSpring) {
+    // Under the paper's response the sweeps ran back to back on the records; under the
+    // solver each sweep brought the positions back for the contacts.
+    if (shape_matching == ShapeMatchingVelocity::Kept) records_to_nodes(obj, state, memory);
     finish_mass_spring(model, obj, state, memory);
     return;
   }
@@ -279,6 +296,7 @@ void predict_object(const Model& model, Index i, State& state, DynamicsMemory& m
   const ObjectModel& obj = model.objects[i];
   if (obj.dynamics == DynamicsKind::MassSpring) {
     memory.object_solve[i] = predict_mass_spring(model, obj, state.params.stiffness[i], state, memory);
+    nodes_to_records(obj, state, memory);
     return;
   }
   for (Index n = obj.node_begin; n < obj.node_end; ++n) memory.x_prev[n] = state.x[n];
@@ -359,7 +377,10 @@ void schedule_springs(const Model& model, DynamicsMemory& memory) {
 void sweep_cells(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   parallel_for(pool, memory.cell_task_count, [&](std::uint32_t task, std::uint32_t) {
     const ObjectModel& obj = model.objects[memory.cell_tasks[task]];
-    if (iteration < obj.mass_spring.iterations) project_cell_constraints(model, obj, state, memory);
+    if (iteration >= obj.mass_spring.iterations) return;
+    records_to_nodes(obj, state, memory);
+    project_cell_constraints(model, obj, state, memory);
+    nodes_to_records(obj, state, memory);
   });
 }
 
@@ -412,6 +433,14 @@ void sweep_springs(const Model& model, int first, int last, DynamicsMemory& memo
 
 void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
   memory.x_prev.resize(model.node_count());
+  memory.node_record = hwy::AllocateAligned<double>(kNodeRecord * std::max<std::size_t>(1, model.node_count()));
+  memory.start_record = hwy::AllocateAligned<double>(kNodeRecord * std::max<std::size_t>(1, model.node_count()));
+  for (Index n = 0; n < model.node_count(); ++n) {
+    double* record = memory.node_record.get() + kNodeRecord * n;
+    std::fill_n(record, kNodeRecord, 0.0);
+    record[3] = model.node_inv_mass[n];  // never written by the sweeps
+    std::fill_n(memory.start_record.get() + kNodeRecord * n, kNodeRecord, 0.0);
+  }
   memory.lambda.resize(model.springs.size());
   memory.tetrahedron_lambda.resize(model.tetrahedra.size());
   memory.cell_shape_lambda.resize(model.cell_count());
@@ -460,7 +489,7 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
         for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_object(model, obj, memory.object_solve[i], state, memory);
       finish_object(model, i, state, memory, ShapeMatchingVelocity::Kept);
     });
-    return;
+      return;
   }
   parallel_for(pool, memory.object_task_count,
                [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
@@ -493,17 +522,38 @@ int dynamics_iterations(const Model& model) {
   return iterations;
 }
 
+// Under the solver the contacts move the positions between the sweeps: each sweep takes
+// them into the node records and gives them back.
 void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  const auto sweeping = [&](Index i) {
+    const ObjectModel& obj = model.objects[i];
+    return obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations;
+  };
   if (memory.use_stages) {
+    parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+      const Index i = memory.object_tasks[task];
+      if (sweeping(i)) nodes_to_records(model.objects[i], state, memory);
+    });
     sweep_springs(model, iteration, iteration + 1, memory, pool);
-    sweep_cells(model, iteration, state, memory, pool);
+    parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+      const Index i = memory.object_tasks[task];
+      if (!sweeping(i)) return;
+      records_to_nodes(model.objects[i], state, memory);
+      project_cell_constraints(model, model.objects[i], state, memory);
+    });
     return;
   }
   parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
     const Index i = memory.object_tasks[task];
+    if (!sweeping(i)) return;
     const ObjectModel& obj = model.objects[i];
-    if (obj.dynamics == DynamicsKind::MassSpring && iteration < obj.mass_spring.iterations)
-      sweep_object(model, obj, memory.object_solve[i], state, memory);
+    nodes_to_records(obj, state, memory);
+    for (Index c = obj.colour_begin; c < obj.colour_end; ++c) {
+      const SpringColour& colour = model.spring_colours[c];
+      project_springs(memory.object_solve[i], colour.begin, colour.end, colour.independent);
+    }
+    records_to_nodes(obj, state, memory);
+    project_cell_constraints(model, obj, state, memory);
   });
 }
 

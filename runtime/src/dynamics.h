@@ -8,6 +8,8 @@
 
 #include "ffd/model.h"
 #include "ffd/state.h"
+#include <hwy/aligned_allocator.h>
+
 #include "kernels/spring_kernels.h"
 
 namespace ffd {
@@ -17,6 +19,9 @@ class WorkerPool;
 // The Dynamics stage's working memory.
 struct DynamicsMemory {
   std::vector<Vec3> x_prev;                // positions at the start of the step
+  // The spring kernel's copy of the positions (kNodeRecord: x, y, z, 1/m) during the sweeps,
+  // and of x_prev (x, y, z, unused), 32-byte aligned.
+  hwy::AlignedFreeUniquePtr<double[]> node_record, start_record;
   std::vector<double> lambda;              // XPBD Lagrange multipliers, one per spring
   std::vector<double> tetrahedron_lambda;  // XPBD Lagrange multipliers, one per tetrahedron
   std::vector<double> cell_shape_lambda;   // XPBD Lagrange multipliers, one per cell (shape)

@@ -3,16 +3,20 @@
 // time). Each lane does exactly the scalar XPBD update of one spring, the same IEEE operations
 // in the same order (no fused multiply-add), so the result is bit-identical to solving the
 // springs one after the other, whichever target runs and however many lanes it has.
+#include <cstddef>
 #include <cstdint>
 
 #include "ffd/model.h"
 
 namespace ffd {
 
+// A node as the kernel reads it: a 32-byte record, so that one aligned load brings a lane's
+// node and four records transpose into four lanes in registers.
+inline constexpr std::size_t kNodeRecord = 4;  // doubles: x, y, z (m), then 1/m (1/kg) or unused
+
 struct SpringSolve {
-  double* x;                       // State::x as 3 N doubles, m
-  const double* x_prev;            // positions at the start of the step, 3 N doubles, m
-  const double* inv_mass;          // per node, 1/kg
+  double* node;                    // per node x, y, z, 1/m: 4 N doubles, 32-byte aligned
+  const double* start;             // per node x, y, z at the start of the step, then unused: 4 N doubles
   const std::int64_t* node_a;      // per spring: its two nodes
   const std::int64_t* node_b;
   const double* rest_length;       // per spring, m
