@@ -2,6 +2,7 @@
 
 #include "ffd/worker_pool.h"
 #include "kernels/spring_kernels.h"
+#include "monotonic_clock.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -307,6 +308,8 @@ void predict_object(const Model& model, Index i, State& state, DynamicsMemory& m
 // pool's thread count: one task per object when the objects, dealt largest first to the
 // least loaded thread, keep every thread within kBalanced of an even share, else stages.
 constexpr double kBalanced = 1.1;
+// Unbalanced scenes: a trial of kTrialSteps steps each way every kTrialPeriod steps.
+constexpr int kTrialSteps = 16, kTrialPeriod = 2048;
 
 void plan_step(const State& state, DynamicsMemory& memory, WorkerPool* pool) {
   Index tasks = 0, cell_tasks = 0;
@@ -319,15 +322,35 @@ void plan_step(const State& state, DynamicsMemory& memory, WorkerPool* pool) {
   memory.object_task_count = tasks;
   memory.cell_task_count = cell_tasks;
   const int threads = pool ? std::min(pool->threads(), 64) : 1;
-  if (threads == memory.stages_for_threads) return;
-  memory.stages_for_threads = threads;
-  double load[64] = {};
-  double total = 0.0;
-  for (Index i : memory.objects_by_work) {
-    *std::min_element(load, load + threads) += memory.object_work[i];
-    total += memory.object_work[i];
+  if (threads != memory.stages_for_threads) {
+    memory.stages_for_threads = threads;
+    double load[64] = {};
+    double total = 0.0;
+    for (Index i : memory.objects_by_work) {
+      *std::min_element(load, load + threads) += memory.object_work[i];
+      total += memory.object_work[i];
+    }
+    memory.unbalanced = threads > 1 && *std::max_element(load, load + threads) > kBalanced * total / threads;
+    memory.trial_step = 0;
   }
-  memory.use_stages = threads > 1 && *std::max_element(load, load + threads) > kBalanced * total / threads;
+  if (!memory.unbalanced) {
+    memory.use_stages = false;
+    return;
+  }
+  memory.timing = memory.trial_step < 2 * kTrialSteps;
+  memory.use_stages = memory.timing ? memory.trial_step >= kTrialSteps : memory.stages_faster;
+  if (memory.timing) memory.step_start_ns = monotonic_ns();
+}
+
+// The end of a step's dynamics: a trial step's time, and the verdict after the last one.
+void end_trial_step(DynamicsMemory& memory) {
+  if (!memory.unbalanced) return;
+  if (memory.timing) memory.trial_ns[memory.use_stages ? 1 : 0] += monotonic_ns() - memory.step_start_ns;
+  if (++memory.trial_step == 2 * kTrialSteps) {
+    memory.stages_faster = memory.trial_ns[1] < memory.trial_ns[0];
+    memory.trial_ns[0] = memory.trial_ns[1] = 0;
+  }
+  if (memory.trial_step == kTrialPeriod) memory.trial_step = 0;
 }
 
 // Cuts every stage's segments into chunks of about this many springs: a chunk of a large
@@ -489,7 +512,8 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
         for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_object(model, obj, memory.object_solve[i], state, memory);
       finish_object(model, i, state, memory, ShapeMatchingVelocity::Kept);
     });
-      return;
+    end_trial_step(memory);
+    return;
   }
   parallel_for(pool, memory.object_task_count,
                [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
@@ -505,6 +529,7 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
   parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
     finish_object(model, memory.object_tasks[task], state, memory, ShapeMatchingVelocity::Kept);
   });
+  end_trial_step(memory);
 }
 
 // Every awake object's prediction, one task each, the largest first; a shape-matching object
@@ -561,6 +586,7 @@ void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, W
   parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
     finish_object(model, memory.object_tasks[task], state, memory, ShapeMatchingVelocity::FromPositions);
   });
+  end_trial_step(memory);
 }
 
 }  // namespace ffd

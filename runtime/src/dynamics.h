@@ -71,8 +71,19 @@ struct DynamicsMemory {
   std::vector<Index> objects_with_cells;
   std::vector<Index> cell_tasks;
   Index cell_task_count = 0;
-  int stages_for_threads = 0;  // the thread count `use_stages` was decided for (0: none yet)
-  bool use_stages = false;
+  // Where the objects do not balance, which way is faster is measured, not assumed: a stage's
+  // wait costs several times more when the host puts the two threads far apart (a run may
+  // move between the two), and both ways give the same bits. Every kTrialPeriod steps, a few
+  // steps go each way, timed from the prediction to the velocities; the faster way runs
+  // until the next trial.
+  int stages_for_threads = 0;  // the thread count `unbalanced` was decided for (0: none yet)
+  bool unbalanced = false;     // the objects do not balance over the threads
+  bool use_stages = false;     // this step's way
+  bool stages_faster = true;   // the last trial's verdict
+  bool timing = false;         // this step is a trial step
+  int trial_step = 0;          // steps since the last trial began
+  std::int64_t step_start_ns = 0;
+  std::int64_t trial_ns[2] = {0, 0};  // per way (one task per object, stages): the trial's time
   std::vector<Vec3> goal_sum;  // shape matching: summed goal positions per node
 };
 void size_dynamics_memory(const Model& model, DynamicsMemory& memory);
