@@ -84,6 +84,16 @@ TEST_CASE("Exit codes: bench and accuracy", "[cli]") {
   check_exit("bench --only nope", 1, "--only: unknown scenario 'nope'");
   check_exit("bench --repetitions 0", 1, "--repetitions");
   check_exit("bench --only happy_buddha --update-docs missing_folder/bench.md", 2, "missing_folder/bench.md: cannot write");
+  check_exit("bench --only happy_buddha --compare missing_reference.json", 1, "--compare: File does not exist");
+  {  // a reference that is not a bench.json: named, before any benchmarking
+    const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_bench");
+    std::filesystem::create_directories(dir);
+    const std::string not_json = (dir / "not_json.json").string(), not_bench = (dir / "not_bench.json").string();
+    std::ofstream(not_json) << "{ scenarios";
+    std::ofstream(not_bench) << "{\"scenarios\": []}";
+    check_exit("bench --only happy_buddha --compare " + not_json, 2, "not_json.json: not valid JSON");
+    check_exit("bench --only happy_buddha --compare " + not_bench, 2, "not_bench.json: not a bench.json");
+  }
   check_exit("accuracy --levels 9", 1, "--levels: Value 9 not in range");
   check_exit("accuracy missing.toml", 2, "missing.toml: cannot open scene file");
   const std::filesystem::path dir = test::fresh_temp_dir("exit_codes_accuracy");
