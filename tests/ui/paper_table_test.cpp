@@ -71,6 +71,22 @@ TEST_CASE("bench --compare: a scene more than 25 % slower than the reference fai
   CHECK_THAT(c.failures[0], Catch::Contains("teapots (paper)") && Catch::Contains("SLOWER by 30 %") &&
                                 Catch::Contains("dynamics, +0.100 ms"));
 
+  // A quick run after the same warm-up: held against the reference's first steps.
+  ffdbench::ScenarioResult quick = after;
+  quick.measured_steps = 400;
+  quick.parallel.step_p50_ms = 0.39;  // 30 % above the first steps' 0.30 ms, under the whole run's
+  nlohmann::json with_head = reference;
+  with_head["scenarios"][0]["threads"][1]["head_steps"] = 400;
+  with_head["scenarios"][0]["threads"][1]["step_p50_head_ms"] = 0.30;
+  c = ffdbench::compare_to_reference({quick}, with_head, "test CPU", "ref.json");
+  REQUIRE(c.failures.size() == 1);
+  CHECK_THAT(c.failures[0], Catch::Contains("0.390 ms on 2 threads, reference 0.300 ms: SLOWER by 30 %"));
+  quick.measured_steps = 300;  // not the reference's first steps: not compared
+  c = ffdbench::compare_to_reference({quick}, with_head, "test CPU", "ref.json");
+  CHECK(c.failures.empty());
+  REQUIRE(c.lines.size() == 1);
+  CHECK_THAT(c.lines[0], Catch::Contains("measured over other steps than ref.json's, not compared"));
+
   // Another CPU model: nothing compared, nothing failed.
   c = ffdbench::compare_to_reference({after}, reference, "other CPU", "ref.json");
   CHECK_FALSE(c.compared);

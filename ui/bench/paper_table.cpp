@@ -156,6 +156,8 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
   run.collision_p99_ms = percentile(collision_ms, 0.99);
   run.step_mean_ms = mean(step_ms);
   run.step_p50_ms = percentile(step_ms, 0.50);
+  run.head_steps = std::min<std::uint64_t>(result.scenario.quick_measured_steps, step_ms.size());
+  run.step_p50_head_ms = percentile(std::vector<double>(step_ms.begin(), step_ms.begin() + static_cast<std::ptrdiff_t>(run.head_steps)), 0.50);
   run.step_p99_ms = percentile(step_ms, 0.99);
   run.dynamics_mean_ms = mean(dynamics_ms);
   run.box_update_mean_ms = mean(box_ms);
@@ -167,11 +169,11 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
 }  // namespace
 
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
-                              const Progress& progress, ffd::ContactResponse response) {
+                              const Progress& progress, ffd::ContactResponse response, bool compare_windows) {
   ScenarioResult result;
   result.scenario = scenario;
   result.response = response;
-  result.warmup_steps = quick ? scenario.quick_warmup_steps : scenario.warmup_steps;
+  result.warmup_steps = quick && !compare_windows ? scenario.quick_warmup_steps : scenario.warmup_steps;
   result.measured_steps = quick ? scenario.quick_measured_steps : scenario.measured_steps;
 
   progress(scenario.key + ": loading", 0, result.warmup_steps + result.measured_steps);
@@ -289,6 +291,7 @@ namespace {
 nlohmann::json thread_json(const ThreadRun& r) {
   return {{"threads", r.threads},          {"collision_mean_ms", r.collision_mean_ms}, {"collision_p99_ms", r.collision_p99_ms},
           {"step_mean_ms", r.step_mean_ms}, {"step_p50_ms", r.step_p50_ms},           {"step_p99_ms", r.step_p99_ms},
+          {"step_p50_head_ms", r.step_p50_head_ms}, {"head_steps", r.head_steps},
           {"dynamics_mean_ms", r.dynamics_mean_ms}, {"box_update_mean_ms", r.box_update_mean_ms},
           {"state_hash", r.state_hash}};
 }
@@ -377,7 +380,16 @@ Comparison compare_to_reference(const std::vector<ScenarioResult>& results, cons
     const nlohmann::json& ref = threads->back();
     where += ".threads[" + std::to_string(threads->size() - 1) + "]";
     const ThreadRun& now = r.parallel;
-    const double ref_p50 = number_at(ref, "step_p50_ms", source, where);
+    // The same steps: a run as long as the reference's, or its first steps after the same warm-up.
+    const double ref_warmup = number_at(*found, "warmup_steps", source, where.substr(0, where.find(".threads")));
+    const double ref_measured = number_at(*found, "measured_steps", source, where.substr(0, where.find(".threads")));
+    const bool whole = static_cast<double>(r.measured_steps) == ref_measured;
+    if (static_cast<double>(r.warmup_steps) != ref_warmup ||
+        (!whole && static_cast<double>(r.measured_steps) != number_at(ref, "head_steps", source, where))) {
+      out.lines.push_back(row + ": measured over other steps than " + source + "'s, not compared");
+      continue;
+    }
+    const double ref_p50 = number_at(ref, whole ? "step_p50_ms" : "step_p50_head_ms", source, where);
     char text[256];
     if (!(now.step_p50_ms > (1.0 + kSlowerAllowed) * ref_p50)) {
       std::snprintf(text, sizeof text, "%s: whole step p50 %.3f ms on %d threads, reference %.3f ms: ok", row.c_str(),

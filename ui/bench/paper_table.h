@@ -40,6 +40,10 @@ struct ThreadRun {
   int threads = 1;
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
   double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
+  // The whole step's p50 over the first head_steps measured steps (a quick run's window
+  // after the full warm-up: what `--compare` holds a quick run against).
+  double step_p50_head_ms = 0;
+  std::uint64_t head_steps = 0;
   double dynamics_mean_ms = 0, box_update_mean_ms = 0;
   std::string state_hash;                              // after the last step
 };
@@ -54,6 +58,10 @@ struct ScenarioResult {
   // bench's thread count; the same states, the hashes must agree).
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
   double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
+  // The whole step's p50 over the first head_steps measured steps (a quick run's window
+  // after the full warm-up: what `--compare` holds a quick run against).
+  double step_p50_head_ms = 0;
+  std::uint64_t head_steps = 0;
   double dynamics_mean_ms = 0;
   ThreadRun single, parallel;
   // Per element on 1 thread: the dynamics stage over its spring projections (springs x
@@ -75,8 +83,11 @@ using Progress = std::function<void(const std::string& what, std::uint64_t done,
 // under the paper's response. Throws on a bad scene file (the message names it).
 // `threads`: the second run's thread count (the first runs on 1). Throws if the two runs end
 // in different states (determinism across thread counts is part of what is measured).
+// `compare_windows` (with `quick`): the full warm-up, then the quick run's measured steps, the
+// stretch whose p50 a full run records as step_p50_head_ms.
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
-                              const Progress& progress, ffd::ContactResponse response = ffd::ContactResponse::Paper);
+                              const Progress& progress, ffd::ContactResponse response = ffd::ContactResponse::Paper,
+                              bool compare_windows = false);
 
 // Figures shared by the bench tables.
 double percentile(std::vector<double> values, double p);  // nearest rank, of a copy
@@ -99,7 +110,9 @@ nlohmann::json to_json(const std::vector<ScenarioResult>& results);
 // `ffdsim bench --compare`: each row of `results` against the row of the same scenario and
 // response in `reference` (a bench.json; `source` names it in messages), when `reference`
 // was measured on `cpu`. A row whose whole-step p50 on the most threads is more than
-// kSlowerAllowed above the reference's fails; its message names the scene, the response and
+// kSlowerAllowed above the reference's over the same steps (a run as long as the
+// reference's: its p50; a shorter one after the same warm-up: the reference's p50 over as
+// many first steps, step_p50_head_ms) fails; its message names the scene, the response and
 // the stage that grew the most. Throws std::runtime_error on a reference that is not a
 // bench.json (the message names `source` and the field).
 inline constexpr double kSlowerAllowed = 0.25;

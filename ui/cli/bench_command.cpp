@@ -74,7 +74,8 @@ int run_bench(const BenchOptions& o) {
         ffd::ContactResponse response = ffd::ContactResponse::Paper;
         ffd::response_from_name(response_text, response);  // checked by the option
         results.push_back(ffdbench::bench_scenario(scenario, ffd::scenario_dir(), o.quick,
-                                                   std::max(2, thread_count(o.threads)), std::ref(progress), response));
+                                                   std::max(2, thread_count(o.threads)), std::ref(progress), response,
+                                                   !o.compare.empty()));
         const ffdbench::ScenarioResult& r = results.back();
         finite = finite && r.finite;
         char line[256];
