@@ -119,14 +119,16 @@ std::string shell_quoted(const std::string& word) {
 }
 
 // The commit the results page's checkout is at, "+ changes" when tracked files other than
-// the results pages themselves differ from it (a page made from uncommitted code says so).
+// the results pages themselves (and the JSON written beside them) differ from it (a page made
+// from uncommitted code says so).
 std::string commit_of(const std::filesystem::path& folder) {
   const std::string git = "git -C " + shell_quoted(folder.string());
   const std::string commit = first_line_of(git + " rev-parse --short=12 HEAD 2>/dev/null");
   if (commit.empty()) return "unknown (not a git checkout)";
   const std::string prefix = first_line_of(git + " rev-parse --show-prefix 2>/dev/null");
   const std::string changes = first_line_of(git + " status --porcelain --untracked-files=no -- ':/' ':(exclude,top)" +
-                                            prefix + "*.md' ':(exclude,top)" + prefix + "*.png' 2>/dev/null | head -1");
+                                            prefix + "*.md' ':(exclude,top)" + prefix + "*.png' ':(exclude,top)" + prefix +
+                                            "*.json' 2>/dev/null | head -1");
   return changes.empty() ? commit : commit + " with uncommitted changes";
 }
 }  // namespace
