@@ -156,8 +156,15 @@ ThreadRun run_scenario(const std::shared_ptr<const ffd::Model>& shared_model, Sc
   run.collision_p99_ms = percentile(collision_ms, 0.99);
   run.step_mean_ms = mean(step_ms);
   run.step_p50_ms = percentile(step_ms, 0.50);
-  run.head_steps = std::min<std::uint64_t>(result.scenario.quick_measured_steps, step_ms.size());
-  run.step_p50_head_ms = percentile(std::vector<double>(step_ms.begin(), step_ms.begin() + static_cast<std::ptrdiff_t>(run.head_steps)), 0.50);
+  run.head.steps = std::min<std::uint64_t>(result.scenario.quick_measured_steps, step_ms.size());
+  const auto head = [&](const std::vector<double>& v) {
+    return std::vector<double>(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(run.head.steps));
+  };
+  run.head.step_p50_ms = percentile(head(step_ms), 0.50);
+  run.head.step_mean_ms = mean(head(step_ms));
+  run.head.collision_mean_ms = mean(head(collision_ms));
+  run.head.dynamics_mean_ms = mean(head(dynamics_ms));
+  run.head.box_update_mean_ms = mean(head(box_ms));
   run.step_p99_ms = percentile(step_ms, 0.99);
   run.dynamics_mean_ms = mean(dynamics_ms);
   run.box_update_mean_ms = mean(box_ms);
@@ -291,8 +298,13 @@ namespace {
 nlohmann::json thread_json(const ThreadRun& r) {
   return {{"threads", r.threads},          {"collision_mean_ms", r.collision_mean_ms}, {"collision_p99_ms", r.collision_p99_ms},
           {"step_mean_ms", r.step_mean_ms}, {"step_p50_ms", r.step_p50_ms},           {"step_p99_ms", r.step_p99_ms},
-          {"step_p50_head_ms", r.step_p50_head_ms}, {"head_steps", r.head_steps},
           {"dynamics_mean_ms", r.dynamics_mean_ms}, {"box_update_mean_ms", r.box_update_mean_ms},
+          {"head", {{"steps", r.head.steps},
+                    {"step_p50_ms", r.head.step_p50_ms},
+                    {"step_mean_ms", r.head.step_mean_ms},
+                    {"collision_mean_ms", r.head.collision_mean_ms},
+                    {"dynamics_mean_ms", r.head.dynamics_mean_ms},
+                    {"box_update_mean_ms", r.head.box_update_mean_ms}}},
           {"state_hash", r.state_hash}};
 }
 }  // namespace
@@ -380,16 +392,22 @@ Comparison compare_to_reference(const std::vector<ScenarioResult>& results, cons
     const nlohmann::json& ref = threads->back();
     where += ".threads[" + std::to_string(threads->size() - 1) + "]";
     const ThreadRun& now = r.parallel;
-    // The same steps: a run as long as the reference's, or its first steps after the same warm-up.
-    const double ref_warmup = number_at(*found, "warmup_steps", source, where.substr(0, where.find(".threads")));
-    const double ref_measured = number_at(*found, "measured_steps", source, where.substr(0, where.find(".threads")));
-    const bool whole = static_cast<double>(r.measured_steps) == ref_measured;
-    if (static_cast<double>(r.warmup_steps) != ref_warmup ||
-        (!whole && static_cast<double>(r.measured_steps) != number_at(ref, "head_steps", source, where))) {
+    // The same steps: a run as long as the reference's (its whole window), or its first steps
+    // after the same warm-up (the reference's head).
+    const std::string row_where = where.substr(0, where.find(".threads"));
+    const bool whole = static_cast<double>(r.measured_steps) == number_at(*found, "measured_steps", source, row_where);
+    const auto head = ref.find("head");
+    if (!whole && (head == ref.end() || !head->is_object()))
+      throw std::runtime_error(source + ": " + where + ".head: missing (written by an older ffdsim bench; run it again)");
+    const nlohmann::json& window = whole ? ref : *head;
+    const std::string window_where = whole ? where : where + ".head";
+    if (static_cast<double>(r.warmup_steps) != number_at(*found, "warmup_steps", source, row_where) ||
+        (!whole && static_cast<double>(r.measured_steps) != number_at(window, "steps", source, window_where))) {
       out.lines.push_back(row + ": measured over other steps than " + source + "'s, not compared");
       continue;
     }
-    const double ref_p50 = number_at(ref, whole ? "step_p50_ms" : "step_p50_head_ms", source, where);
+    const auto reference_ms = [&](const char* key) { return number_at(window, key, source, window_where); };
+    const double ref_p50 = reference_ms("step_p50_ms");
     char text[256];
     if (!(now.step_p50_ms > (1.0 + kSlowerAllowed) * ref_p50)) {
       std::snprintf(text, sizeof text, "%s: whole step p50 %.3f ms on %d threads, reference %.3f ms: ok", row.c_str(),
@@ -397,15 +415,14 @@ Comparison compare_to_reference(const std::vector<ScenarioResult>& results, cons
       out.lines.push_back(text);
       continue;
     }
-    // The stage that grew the most, in ms per step (means: a stage's p50 is not measured).
-    const double dynamics = now.dynamics_mean_ms - number_at(ref, "dynamics_mean_ms", source, where);
-    const double boxes = now.box_update_mean_ms - number_at(ref, "box_update_mean_ms", source, where);
+    // The stage that grew the most, in ms per step over the same steps (means: a stage's p50
+    // is not measured).
+    const double dynamics = now.dynamics_mean_ms - reference_ms("dynamics_mean_ms");
+    const double boxes = now.box_update_mean_ms - reference_ms("box_update_mean_ms");
     const double collision = (now.collision_mean_ms - now.box_update_mean_ms) -
-                             (number_at(ref, "collision_mean_ms", source, where) -
-                              number_at(ref, "box_update_mean_ms", source, where));
+                             (reference_ms("collision_mean_ms") - reference_ms("box_update_mean_ms"));
     const double rest = (now.step_mean_ms - now.collision_mean_ms - now.dynamics_mean_ms) -
-                        (number_at(ref, "step_mean_ms", source, where) -
-                         number_at(ref, "collision_mean_ms", source, where) - number_at(ref, "dynamics_mean_ms", source, where));
+                        (reference_ms("step_mean_ms") - reference_ms("collision_mean_ms") - reference_ms("dynamics_mean_ms"));
     const std::pair<double, const char*> stages[] = {{dynamics, "dynamics"},
                                                      {boxes, "FFD AABB update"},
                                                      {collision, "broad and narrow phase, planes"},

@@ -40,11 +40,13 @@ struct ThreadRun {
   int threads = 1;
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
   double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
-  // The whole step's p50 over the first head_steps measured steps (a quick run's window
-  // after the full warm-up: what `--compare` holds a quick run against).
-  double step_p50_head_ms = 0;
-  std::uint64_t head_steps = 0;
   double dynamics_mean_ms = 0, box_update_mean_ms = 0;
+  // The same figures over the first `steps` measured steps only: a quick run's window after
+  // the full warm-up, what `--compare` holds a quick run against.
+  struct Head {
+    std::uint64_t steps = 0;
+    double step_p50_ms = 0, step_mean_ms = 0, collision_mean_ms = 0, dynamics_mean_ms = 0, box_update_mean_ms = 0;
+  } head;
   std::string state_hash;                              // after the last step
 };
 
@@ -57,15 +59,11 @@ struct ScenarioResult {
   // The first run (1 thread), whose figures are also these fields, and the second (the
   // bench's thread count; the same states, the hashes must agree).
   double collision_mean_ms = 0, collision_p99_ms = 0;  // per measured step
-  double step_mean_ms = 0, step_p50_ms = 0, step_p99_ms = 0;  // the whole step, dynamics included
-  // The whole step's p50 over the first head_steps measured steps (a quick run's window
-  // after the full warm-up: what `--compare` holds a quick run against).
-  double step_p50_head_ms = 0;
-  std::uint64_t head_steps = 0;
+  double step_mean_ms = 0, step_p99_ms = 0;            // the whole step, dynamics included
   double dynamics_mean_ms = 0;
   ThreadRun single, parallel;
-  // Per element on 1 thread: the dynamics stage over its spring projections (springs x
-  // iterations), the box update over its boxes, ns.
+  // Per element on 1 thread: a spring projection timed alone (ffd::time_spring_sweeps), the
+  // box update over its boxes, ns.
   double ns_per_spring_projection = 0, ns_per_box_update = 0;
   double contacts_mean = 0;                   // inter + self + plane contacts per step
   std::uint32_t contacts_max = 0;
@@ -84,7 +82,7 @@ using Progress = std::function<void(const std::string& what, std::uint64_t done,
 // `threads`: the second run's thread count (the first runs on 1). Throws if the two runs end
 // in different states (determinism across thread counts is part of what is measured).
 // `compare_windows` (with `quick`): the full warm-up, then the quick run's measured steps, the
-// stretch whose p50 a full run records as step_p50_head_ms.
+// stretch a full run records as ThreadRun::head.
 ScenarioResult bench_scenario(const Scenario& scenario, const std::string& scenarios_dir, bool quick, int threads,
                               const Progress& progress, ffd::ContactResponse response = ffd::ContactResponse::Paper,
                               bool compare_windows = false);
@@ -112,7 +110,7 @@ nlohmann::json to_json(const std::vector<ScenarioResult>& results);
 // was measured on `cpu`. A row whose whole-step p50 on the most threads is more than
 // kSlowerAllowed above the reference's over the same steps (a run as long as the
 // reference's: its p50; a shorter one after the same warm-up: the reference's p50 over as
-// many first steps, step_p50_head_ms) fails; its message names the scene, the response and
+// many first steps, ThreadRun::head) fails; its message names the scene, the response and
 // the stage that grew the most. Throws std::runtime_error on a reference that is not a
 // bench.json (the message names `source` and the field).
 inline constexpr double kSlowerAllowed = 0.25;
