@@ -88,8 +88,9 @@ struct Region {
 // One set of collision boxes over the lattice cells, each given by 8 corners and a centre
 // node in its cell's local coordinates (s, t, u), moved by trilinear FFD (eq. 2). Boxes are
 // stored in cell order, so the boxes of cell c are [cell_box_begin[c], cell_box_begin[c + 1]).
-// Boxes are updated kBoxLanes at a time (kernels/box_kernels.h).
-inline constexpr Index kBoxLanes = 4;
+// Boxes are updated in blocks of kBoxLanes (kernels/box_kernels.h): AVX-512's 8 doubles; a
+// narrower target takes a block in parts.
+inline constexpr Index kBoxLanes = 8;
 
 struct BoxSet {
   std::vector<Index> box_cell;                  // lattice cell of each box
