@@ -154,20 +154,47 @@ bool fill_grid(const Grid& g, const Index* boxes, Index count, const Bounds& s, 
   return true;
 }
 
-// Self-collision of one object: pairs of boxes of cells that share no lattice node.
-void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, const Bounds& s,
-                PairWorkspace& w) {
+// A large object's own pairs are found in parts, so that they spread over the threads: part
+// k of n takes the k-th of n slabs of the object's grid along its longest axis. Boxes of
+// about kBoxesPerSelfPart a part, at most kMaxSelfParts; fixed by the box count alone, so the
+// work (and its counters) is the same whatever the thread count.
+constexpr Index kBoxesPerSelfPart = 256;
+constexpr std::uint32_t kMaxSelfParts = 8;
+
+std::uint32_t self_parts(const BoxSet& boxes, const ObjectModel& object) {
+  const Index count = end_box(boxes, object) - first_box(boxes, object);
+  std::uint32_t parts = 1;
+  while (parts < kMaxSelfParts && count >= 2 * parts * kBoxesPerSelfPart) parts *= 2;
+  return parts;
+}
+
+// Self-collision of one object: pairs of boxes of cells that share no lattice node. Part
+// `part` of `parts` (self_parts): the grid cells of one slab, and the boxes that reach into
+// it. A pair is taken in the grid cell of the lower corner of its overlap, which lies in one
+// slab: the parts together find each pair once, as one part would.
+void self_pairs(const Model& model, const BoxSet& boxes, const ObjectModel& object, std::uint32_t part,
+                std::uint32_t parts, const Bounds& s, PairWorkspace& w) {
   const Index first = first_box(boxes, object), last = end_box(boxes, object);
   if (last - first < 2) return;
   const Index o = static_cast<Index>(&object - model.objects.data());
   const Grid g = make_grid(s.object_lo[o].data(), s.object_hi[o].data(), grid_cell(model, object.cell_size));
   if (g.cells() + 1 > w.grid_begin.size()) return;  // cannot happen: sized for kBroadPhaseGridCells
+  int cell_lo[3] = {0, 0, 0}, cell_hi[3] = {g.n[0], g.n[1], g.n[2]};  // the slab's grid cells, [lo, hi)
+  const int axis = static_cast<int>(std::max_element(g.n, g.n + 3) - g.n);
+  cell_lo[axis] = static_cast<int>(static_cast<std::int64_t>(g.n[axis]) * part / parts);
+  cell_hi[axis] = static_cast<int>(static_cast<std::int64_t>(g.n[axis]) * (part + 1) / parts);
+  if (cell_lo[axis] == cell_hi[axis]) return;
   Index* list = w.box_list_a.data();
-  for (Index b = first; b < last; ++b) list[b - first] = b;
-  if (!fill_grid(g, list, last - first, s, w)) return;
-  for (int z = 0; z < g.n[2]; ++z)
-    for (int y = 0; y < g.n[1]; ++y)
-      for (int x = 0; x < g.n[0]; ++x) {
+  Index count = 0;
+  for (Index b = first; b < last; ++b) {
+    list[count] = b;  // kept if it reaches into the slab
+    count += static_cast<Index>(g.coordinate(s.box_hi[axis][b], axis) >= cell_lo[axis] &&
+                                g.coordinate(s.box_lo[axis][b], axis) < cell_hi[axis]);
+  }
+  if (!fill_grid(g, list, count, s, w)) return;
+  for (int z = cell_lo[2]; z < cell_hi[2]; ++z)
+    for (int y = cell_lo[1]; y < cell_hi[1]; ++y)
+      for (int x = cell_lo[0]; x < cell_hi[0]; ++x) {
         const std::size_t c = g.index(x, y, z);
         const Index begin = w.grid_begin[c], end = w.grid_begin[c + 1];
         if (end - begin < 2) continue;
@@ -414,8 +441,11 @@ bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query,
     s.pair_tasks[tasks++] = task;
   };
   if (query.self || query.neighbours)
-    for (Index o = 0; o < objects; ++o)
-      if (!asleep(o)) add_task({o, o});
+    for (Index o = 0; o < objects; ++o) {
+      if (asleep(o)) continue;
+      const std::uint32_t parts = query.self ? self_parts(boxes, model.objects[o]) : 1;
+      for (std::uint32_t part = 0; part < parts; ++part) add_task({o, o, part, parts});
+    }
   if (query.inter && objects > 1) {
     // Sort and sweep over the objects' bounds along x.
     Index* order = s.object_order.data();
@@ -453,8 +483,8 @@ bool find_pairs(const Model& model, const BoxSet& boxes, const PairQuery& query,
         object_pairs(model, boxes, task.a, task.b, bounds, w);
         continue;
       }
-      if (query.self) self_pairs(model, boxes, model.objects[task.a], bounds, w);
-      if (query.neighbours) neighbour_pairs(model, boxes, model.objects[task.a], bounds, w);
+      if (query.self) self_pairs(model, boxes, model.objects[task.a], task.part, task.parts, bounds, w);
+      if (query.neighbours && task.part == 0) neighbour_pairs(model, boxes, model.objects[task.a], bounds, w);
     }
   };
   const Index chunks = (tasks + per_chunk - 1) / per_chunk;

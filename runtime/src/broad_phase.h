@@ -21,8 +21,10 @@ struct BoxPair {
 struct BroadPhaseMemory {
   std::vector<std::array<double, 3>> object_lo, object_hi;
   std::vector<Index> object_order;
+  // Objects a and b (a == b: a's own pairs, in part `part` of `parts`, see self_pairs).
   struct PairTask {
     Index a, b;
+    std::uint32_t part = 0, parts = 1;
   };
   std::vector<PairTask> pair_tasks;  // capacity grown between steps
   // A thread's room for one task: boxes picked from one object or a pair, the grid over them
