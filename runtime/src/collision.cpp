@@ -935,24 +935,27 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Co
 
 }  // namespace
 
-void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,
-                    StageCounters& counters, double margin) {
+bool pair_hit(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index p,
+              double margin) {
   const BoxSet& boxes = *level.boxes;
-  const Index pairs = scratch.pair_count;
+  const BoxPair& pair = scratch.pairs[p];
+  const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
+  const bool other = o1 != o2;
+  const double skin = other ? level.skin : 0.0;
   // (A pair of two sleepers is not looked at; should one of them wake before its turn, it is
   // tested then.)
+  return (state.asleep[o1] && state.asleep[o2]) || nodes_near(model, level, state, scratch, pair.a, pair.b, margin + skin) ||
+         nodes_near(model, level, state, scratch, pair.b, pair.a, margin + skin) ||
+         (other && model.box_skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping);
+}
+
+void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,
+                    StageCounters& counters, double margin) {
+  const Index pairs = scratch.pair_count;
   constexpr Index kPairsPerChunk = 32;
   auto detect = [&](std::uint32_t chunk, std::uint32_t) {
-    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p) {
-      const BoxPair& pair = scratch.pairs[p];
-      const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
-      const bool other = o1 != o2;
-      const double skin = other ? level.skin : 0.0;
-      scratch.pair_hit[p] = (state.asleep[o1] && state.asleep[o2]) ||
-                            nodes_near(model, level, state, scratch, pair.a, pair.b, margin + skin) ||
-                            nodes_near(model, level, state, scratch, pair.b, pair.a, margin + skin) ||
-                            (other && model.box_skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping);
-    }
+    for (Index p = chunk * kPairsPerChunk; p < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++p)
+      scratch.pair_hit[p] = pair_hit(model, level, state, scratch, p, margin);
   };
   const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
   parallel_for(scratch.pool, chunks, detect);

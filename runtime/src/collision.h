@@ -146,6 +146,11 @@ bool scan_points_in_box(const CollisionMemory& scratch, Index container, double 
 bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index mover,
                 Index container, double margin);
 
+// Whether candidate pair p has a tested node of one box inside the other grown by `margin`
+// (m), or its two objects sleep. Read-only.
+bool pair_hit(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index p,
+              double margin);
+
 // The narrow phase's detection, read-only and over the pool: NarrowMemory::pair_hit[p] for each
 // candidate pair, whether a tested node of one box lies inside the other grown by `margin`
 // (the paper's response: 0; the solver's: its speculative distance), or both objects sleep

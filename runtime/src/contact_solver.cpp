@@ -156,16 +156,11 @@ Mat3 anchor_frame(const Bodies& bodies, const BoxSet* boxes, const ContactConstr
   return c.face_box == kNoIndex ? Mat3::Identity() : face_frame(bodies, *boxes, c.face_box, c.face);
 }
 
-// Appends a contact as a constraint: side b's point must stay on the outer side (along n) of
+// Contact record r as a constraint: side b's point must stay on the outer side (along n) of
 // side a's surface; it is `depth` inside now. Its key names it from step to step (0: never
 // anchored); a contact on a face of a box of `boxes` keeps its anchor in that face's frame.
-void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord& r, const BoxSet* boxes = nullptr) {
+void make_constraint(const Bodies& bodies, const ContactRecord& r, const BoxSet* boxes, ContactConstraint& c) {
   const double dt = bodies.model.settings.dt;
-  if (scratch.constraint_count >= scratch.constraints.size()) {
-    scratch.constraints_dropped = true;
-    return;
-  }
-  ContactConstraint& c = scratch.constraints[scratch.constraint_count++];
   c.a = r.a;
   c.b = r.b;
   c.normal = r.normal;
@@ -183,6 +178,56 @@ void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord&
   c.lodged = r.depth > kLodgedDepth + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
 }
 
+// Appends contact record r to the constraints (make_constraint); beyond their room, dropped.
+void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord& r, const BoxSet* boxes = nullptr) {
+  if (scratch.constraint_count >= scratch.constraints.size()) {
+    scratch.constraints_dropped = true;
+    return;
+  }
+  make_constraint(bodies, r, boxes, scratch.constraints[scratch.constraint_count++]);
+}
+
+// Candidate pair p's contacts, in order: each tested node of one box inside the other, or
+// near a face of it (within kSpeculativeDistance outside: a speculative contact, which holds
+// the node at the face should the solve move it in, so that a resting contact stays in the
+// list from step to step). `on_contact(record, inside, node)` for each, node the tested
+// node's position. Read-only.
+template <class OnContact>
+void pair_box_contacts(const Model& model, const BoxLevel& level, const State& state, const StepMemory& scratch, Index p,
+                       const OnContact& on_contact) {
+  const BoxSet& boxes = *level.boxes;
+  const BoxPair& pair = scratch.pairs[p];
+  const double margin = kSpeculativeDistance, recent = kRecentEntrySteps * model.settings.dt;
+  for (int half = 0; half < 2; ++half) {
+    const Index mover = half == 0 ? pair.a : pair.b, container = half == 0 ? pair.b : pair.a;
+    const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
+    scan_points_in_box(
+        scratch, container, 0.0, recent, tested_node_count(level),
+        [&](int k) { return tested_node(model, level, state, scratch, mover, k); },
+        [&] { return Vec3(mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a])); },
+        [&](int k, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
+          int face = hit.face;
+          double depth = hit.depth;
+          if (!hit.inside) {
+            const NearFace near = near_face(planes, node, margin);
+            if (near.face < 0) return false;
+            face = near.face;
+            depth = -near.height;
+          }
+          ContactRecord r;
+          r.a = face_point(model, boxes, container, face);
+          r.b = cell_point(model, cell_b, tested_node_local(model, level, mover, k));
+          r.normal = planes.normal[face];
+          r.depth = depth;
+          r.key = box_contact_key(state.params.accuracy, container, face, mover, k);
+          r.face_box = container;
+          r.face = static_cast<std::uint8_t>(face);
+          on_contact(r, hit.inside, node);
+          return false;  // answered in the solve, not at once
+        });
+  }
+}
+
 }  // namespace
 
 void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
@@ -193,62 +238,78 @@ void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.grab_force = Vec3::Zero();
 }
 
+// The detection over the pool, in two passes over the candidate pairs: the first counts
+// each pair's contacts, the second writes them where the counts put them in the list. The
+// list is the one a single thread writes in pair order, whatever the thread count.
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                        StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;
   const Index pairs = scratch.pair_count;
-  const double margin = kSpeculativeDistance;
-  find_pair_hits(model, level, state, scratch, counters, margin);  // which pairs hold a node of one box in or near the other
-  const int node_count = tested_node_count(level);
   const Bodies bodies{model, state, scratch};
-  const double recent = kRecentEntrySteps * model.settings.dt;
-  // The hits, in pair order, into the contact list.
+  constexpr Index kPairsPerChunk = 32;
+  const Index chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+  auto chunk_pairs = [&](std::uint32_t chunk) {
+    return std::pair{chunk * kPairsPerChunk, std::min(pairs, (chunk + 1) * kPairsPerChunk)};
+  };
+  // Pass 1: each pair's constraints and logged contacts (those inside), counted.
+  parallel_for(scratch.pool, chunks, [&](std::uint32_t chunk, std::uint32_t) {
+    const auto [begin, end] = chunk_pairs(chunk);
+    for (Index p = begin; p < end; ++p) {
+      std::array<Index, 2> found{0, 0};
+      if (pair_hit(model, level, state, scratch, p, kSpeculativeDistance))
+        pair_box_contacts(model, level, state, scratch, p, [&](const ContactRecord&, bool inside, const Vec3&) {
+          ++found[0];
+          found[1] += inside ? 1 : 0;
+        });
+      scratch.pair_contacts[p + 1] = found;
+    }
+  });
+  counters.node_tests += 2 * tested_node_count(level) * pairs;
+  // Where each pair's share starts; the pairs tested; a moving object wakes a sleeper it meets
+  // (from the next step).
+  const Index first_constraint = scratch.constraint_count, first_logged = scratch.contact_count;
+  scratch.pair_contacts[0] = {first_constraint, first_logged};
   for (Index p = 0; p < pairs; ++p) {
+    for (int i = 0; i < 2; ++i) scratch.pair_contacts[p + 1][i] += scratch.pair_contacts[p][i];
     const BoxPair& pair = scratch.pairs[p];
     const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
-    if (sleeping(model)) meet(state, o1, o2);  // a moving object wakes a sleeper it meets (from the next step)
-    const bool self = o1 == o2;
-    if (self) ++counters.self_pairs_tested;
+    if (sleeping(model)) meet(state, o1, o2);
+    if (o1 == o2) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
-    if (!scratch.pair_hit[p]) continue;
-    for (int half = 0; half < 2; ++half) {
-      const Index mover = half == 0 ? pair.a : pair.b, container = half == 0 ? pair.b : pair.a;
-      const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
-      scan_points_in_box(
-          scratch, container, 0.0, recent, node_count,
-          [&](int k) { return tested_node(model, level, state, scratch, mover, k); },
-          [&] {
-            return Vec3(mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a]));
-          },
-          [&](int k, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
-            int face = hit.face;
-            double depth = hit.depth;
-            if (!hit.inside) {
-              // Near, not in: a speculative contact, which holds the node at the face should the
-              // solve move it in, so that a resting contact stays in the list from step to step.
-              const NearFace near = near_face(planes, node, margin);
-              if (near.face < 0) return false;
-              face = near.face;
-              depth = -near.height;
-            } else {
-              if (self) ++counters.self_contacts;
-              else ++counters.inter_contacts;
-              max_depth = std::max(max_depth, depth);
-              scratch.record_contact(node, planes.normal[face], depth, self ? ContactKind::Self : ContactKind::Inter);
-            }
-            ContactRecord r;
-            r.a = face_point(model, boxes, container, face);
-            r.b = cell_point(model, cell_b, tested_node_local(model, level, mover, k));
-            r.normal = planes.normal[face];
-            r.depth = depth;
-            r.key = box_contact_key(state.params.accuracy, container, face, mover, k);
-            r.face_box = container;
-            r.face = static_cast<std::uint8_t>(face);
-            add_contact(bodies, scratch, r, &boxes);
-            return false;  // answered in the solve, not at once
-          });
-    }
   }
+  // Pass 2: the pairs with contacts write them into their places (beyond the room: dropped).
+  const std::array<Index, 2> total = scratch.pair_contacts[pairs];
+  const std::size_t constraint_room = scratch.constraints.size(), log_room = scratch.contacts.size();
+  using ContactShare = SolverMemory::ContactShare;
+  for (ContactShare& share : scratch.contact_shares) share = ContactShare{};
+  parallel_for(scratch.pool, chunks, [&](std::uint32_t chunk, std::uint32_t thread) {
+    ContactShare& share = scratch.contact_shares[thread];
+    const auto [begin, end] = chunk_pairs(chunk);
+    for (Index p = begin; p < end; ++p) {
+      std::array<Index, 2> next = scratch.pair_contacts[p];
+      if (next == scratch.pair_contacts[p + 1]) continue;
+      const bool self = model.cell_object[boxes.box_cell[scratch.pairs[p].a]] == model.cell_object[boxes.box_cell[scratch.pairs[p].b]];
+      pair_box_contacts(model, level, state, scratch, p, [&](const ContactRecord& r, bool inside, const Vec3& node) {
+        if (next[0] < constraint_room) make_constraint(bodies, r, &boxes, scratch.constraints[next[0]]);
+        ++next[0];
+        if (!inside) return;
+        ++(self ? share.self_contacts : share.inter_contacts);
+        share.max_depth = std::max(share.max_depth, r.depth);
+        if (next[1] < log_room)
+          scratch.contacts[next[1]] = {node, r.normal, r.depth, self ? ContactKind::Self : ContactKind::Inter};
+        ++next[1];
+      });
+    }
+  });
+  for (const ContactShare& share : scratch.contact_shares) {
+    counters.self_contacts += share.self_contacts;
+    counters.inter_contacts += share.inter_contacts;
+    max_depth = std::max(max_depth, share.max_depth);
+  }
+  scratch.constraint_count = static_cast<Index>(std::min<std::size_t>(total[0], constraint_room));
+  if (total[0] > constraint_room) scratch.constraints_dropped = true;
+  scratch.contact_count = static_cast<Index>(std::min<std::size_t>(total[1], log_room));
+  scratch.contacts_dropped += static_cast<std::uint32_t>(total[1] - scratch.contact_count);
 }
 
 void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,

@@ -87,6 +87,15 @@ struct SolverMemory {
   // whatever earlier passes left.
   std::vector<std::uint64_t> node_stamp;
   std::uint64_t node_stamp_epoch = 0;
+  // The box contacts' detection over the pool (find_box_contacts): per candidate pair, where
+  // its constraints and its logged contacts start (a running count, pairs + 1 entries), and
+  // each thread's share of the counts.
+  std::vector<std::array<Index, 2>> pair_contacts;
+  struct ContactShare {
+    std::uint32_t self_contacts = 0, inter_contacts = 0;
+    double max_depth = 0.0;  // m
+  };
+  std::vector<ContactShare> contact_shares;
 };
 
 

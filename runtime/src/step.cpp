@@ -45,6 +45,7 @@ namespace {
 void size_pair_answers(StepMemory& memory) {
   const std::size_t pairs = memory.pairs.size();
   memory.pair_hit.resize(pairs);
+  memory.pair_contacts.resize(pairs + 1);
   memory.cell_pair_keys.resize(pairs);
   if (!memory.pool || memory.pool->threads() < 2) return;
   memory.pair_wave.resize(pairs);
@@ -96,6 +97,7 @@ void size_solver_memory(const Model& model, SolverMemory& s) {
   s.object_solving.assign(model.objects.size(), 0);
   s.object_motion.resize(model.objects.size());
   s.node_stamp.assign(model.node_count(), 0);
+  s.contact_shares.resize(1);
 }
 
 }  // namespace
@@ -129,6 +131,7 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
   StepMemory& memory = scratch.memory();
   memory.pool = &pool;
   if (!model.collides) return;
+  memory.contact_shares.resize(static_cast<std::size_t>(pool.threads()));
   const std::size_t threads = static_cast<std::size_t>(pool.threads());
   size_broad_phase_memory(model, memory, threads);
   memory.narrow_workspaces.resize(threads);
