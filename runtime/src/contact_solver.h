@@ -19,8 +19,9 @@
 //                 its approach, once per node and never adding kinetic energy
 //                 (solve_contacts)
 // The contact list (SolverMemory::constraints) is the boundary: detection writes it, the solve reads
-// it. Everything runs in list order on one thread but the sweeps (objects over the pool), so
-// the result does not depend on the thread count.
+// it. The box contacts' detection and the sweeps run over the pool, the first writing the
+// list a single thread would write, the second as the dynamics does (dynamics.h); the rest
+// runs in list order on one thread, so the result does not depend on the thread count.
 #include <array>
 #include <cstdint>
 #include <vector>

@@ -207,7 +207,7 @@ struct Model {
   std::vector<Spring> springs;          // Gauss-Seidel order: colour by colour
   std::vector<SpringColour> spring_colours;
   // The same springs as arrays for the kernels: their nodes, and rest lengths (m).
-  std::vector<std::int64_t> spring_node_a, spring_node_b;
+  std::vector<Index> spring_node_a, spring_node_b;
   std::vector<double> spring_rest_length;
   std::vector<Tetrahedron> tetrahedra;
   std::vector<Region> regions;

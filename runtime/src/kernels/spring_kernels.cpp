@@ -56,7 +56,7 @@ HWY_INLINE void project_lanes(D d, const SpringSolve& s, std::size_t first, cons
 // Any lane count: each lane's record read into and written from rows one value at a time.
 struct RowsByLane {
   template <class D, class V = hn::Vec<D>>
-  HWY_INLINE void read(D d, const double* records, const std::int64_t* index, V& x, V& y, V& z, V& w) const {
+  HWY_INLINE void read(D d, const double* records, const Index* index, V& x, V& y, V& z, V& w) const {
     constexpr std::size_t kLanesMax = 4;
     HWY_ALIGN double row[4][kLanesMax];
     for (std::size_t l = 0; l < hn::Lanes(d); ++l)
@@ -64,7 +64,7 @@ struct RowsByLane {
     x = hn::Load(d, row[0]), y = hn::Load(d, row[1]), z = hn::Load(d, row[2]), w = hn::Load(d, row[3]);
   }
   template <class D, class V = hn::Vec<D>>
-  HWY_INLINE void write(D d, double* records, const std::int64_t* index, V x, V y, V z, V w) const {
+  HWY_INLINE void write(D d, double* records, const Index* index, V x, V y, V z, V w) const {
     constexpr std::size_t kLanesMax = 4;
     HWY_ALIGN double row[4][kLanesMax];
     hn::Store(x, d, row[0]), hn::Store(y, d, row[1]), hn::Store(z, d, row[2]), hn::Store(w, d, row[3]);
@@ -79,7 +79,7 @@ struct RowsByLane {
 struct RowsByTranspose {
   using D = hn::Full256<double>;
   using V = hn::Vec<D>;
-  HWY_INLINE void read(D d, const double* records, const std::int64_t* index, V& x, V& y, V& z, V& w) const {
+  HWY_INLINE void read(D d, const double* records, const Index* index, V& x, V& y, V& z, V& w) const {
     const V r0 = hn::Load(d, records + kNodeRecord * index[0]), r1 = hn::Load(d, records + kNodeRecord * index[1]);
     const V r2 = hn::Load(d, records + kNodeRecord * index[2]), r3 = hn::Load(d, records + kNodeRecord * index[3]);
     const V xz01 = hn::InterleaveLower(r0, r1), yw01 = hn::InterleaveUpper(d, r0, r1);  // x0 x1 z0 z1, y0 y1 w0 w1
@@ -87,7 +87,7 @@ struct RowsByTranspose {
     x = hn::ConcatLowerLower(d, xz23, xz01), z = hn::ConcatUpperUpper(d, xz23, xz01);
     y = hn::ConcatLowerLower(d, yw23, yw01), w = hn::ConcatUpperUpper(d, yw23, yw01);
   }
-  HWY_INLINE void write(D d, double* records, const std::int64_t* index, V x, V y, V z, V w) const {
+  HWY_INLINE void write(D d, double* records, const Index* index, V x, V y, V z, V w) const {
     const V xz01 = hn::ConcatLowerLower(d, z, x), xz23 = hn::ConcatUpperUpper(d, z, x);
     const V yw01 = hn::ConcatLowerLower(d, w, y), yw23 = hn::ConcatUpperUpper(d, w, y);
     hn::Store(hn::InterleaveLower(xz01, yw01), d, records + kNodeRecord * index[0]);

@@ -17,8 +17,8 @@ inline constexpr std::size_t kNodeRecord = 4;  // doubles: x, y, z (m), then 1/m
 struct SpringSolve {
   double* node;                    // per node x, y, z, 1/m: 4 N doubles, 32-byte aligned
   const double* start;             // per node x, y, z at the start of the step, then unused: 4 N doubles
-  const std::int64_t* node_a;      // per spring: its two nodes
-  const std::int64_t* node_b;
+  const Index* node_a;             // per spring: its two nodes
+  const Index* node_b;
   const double* rest_length;       // per spring, m
   double* lambda;                  // per spring: XPBD multiplier of this step
   const double* inv_denominator;   // per spring: 1 / ((1 + gamma)(wa + wb) + alpha~)
