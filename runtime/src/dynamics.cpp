@@ -86,16 +86,38 @@ Vec3 cell_centre(const Model& model, const State& state, Index cell) {
 // Each cell's rotation for the step's sweeps, fitted to the predicted positions: the sweeps
 // move the nodes little beside the prediction, and fitting once a step instead of once a
 // projection costs a fraction of the time (docs/notes/2026-11-28-code-findings.md#corotated-cells).
+// Each cell's on its own: the cells may be fitted in any order, on any thread.
+void fit_cell_rotation(const Model& model, Index cell, State& state, DynamicsMemory& memory) {
+  const std::array<Index, 8>& node = model.cell_nodes[cell];
+  const Vec3& rest_centre = model.cell_rest_centre[cell];
+  const Vec3 centre = cell_centre(model, state, cell);
+  Mat3 A = Mat3::Zero();
+  for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
+  fit_rotation(A, state.cell_rotation[cell], 2);  // warm-started from the last step
+  memory.cell_rotation_matrix[cell] = state.cell_rotation[cell].matrix();
+}
+
+bool has_cell_shapes(const ObjectModel& obj) {
+  return obj.dynamics == DynamicsKind::MassSpring && obj.mass_spring.shape_stiffness > 0.0;
+}
+
 void fit_cell_rotations(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
-  for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) {
-    const std::array<Index, 8>& node = model.cell_nodes[cell];
-    const Vec3& rest_centre = model.cell_rest_centre[cell];
-    const Vec3 centre = cell_centre(model, state, cell);
-    Mat3 A = Mat3::Zero();
-    for (Index n : node) A += model.node_mass[n] * (state.x[n] - centre) * (model.node_rest[n] - rest_centre).transpose();
-    fit_rotation(A, state.cell_rotation[cell], 2);  // warm-started from the last step
-    memory.cell_rotation_matrix[cell] = state.cell_rotation[cell].matrix();
-  }
+  for (Index cell = obj.cell_begin; cell < obj.cell_end; ++cell) fit_cell_rotation(model, cell, state, memory);
+}
+
+// The rotations of every stepping object's cells, in chunks over the pool (after the
+// predictions: they fit the predicted positions).
+void fit_cell_rotations_over_pool(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  if (memory.cell_task_count == 0) return;
+  constexpr Index kCellsPerChunk = 64;
+  const Index cells = static_cast<Index>(model.cell_count());
+  parallel_for(pool, (cells + kCellsPerChunk - 1) / kCellsPerChunk, [&](std::uint32_t chunk, std::uint32_t) {
+    for (Index cell = chunk * kCellsPerChunk; cell < std::min(cells, (chunk + 1) * kCellsPerChunk); ++cell) {
+      const Index object = model.cell_object[cell];
+      if (memory.object_stepping[object] && has_cell_shapes(model.objects[object]))
+        fit_cell_rotation(model, cell, state, memory);
+    }
+  });
 }
 
 // One XPBD projection of a cell's shape constraint: a corotated element, shape matching
@@ -154,10 +176,14 @@ SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stif
                      gamma};
 }
 
+// Where a step fits its cells' rotations (fit_cell_rotations): in the object's own task, or
+// afterwards for every object over the pool.
+enum class CellFit { InTask, OverPool };
+
 // x_prev = x, the prediction x += dt v, the multipliers reset, the denominators for the
 // object's live stiffness.
 SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, double stiffness, State& state,
-                                DynamicsMemory& memory) {
+                                DynamicsMemory& memory, CellFit fit) {
   const double dt = model.settings.dt;
   for (Index n = obj.node_begin; n < obj.node_end; ++n) {
     memory.x_prev[n] = state.x[n];
@@ -178,7 +204,7 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) memory.tetrahedron_lambda[t] = 0.0;
   if (obj.mass_spring.shape_stiffness > 0.0) {
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c) memory.cell_shape_lambda[c] = 0.0;
-    fit_cell_rotations(model, obj, state, memory);
+    if (fit == CellFit::InTask) fit_cell_rotations(model, obj, state, memory);
   }
   return solve;
 }
@@ -293,10 +319,10 @@ void finish_object(const Model& model, Index i, State& state, DynamicsMemory& me
   for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
 }
 
-void predict_object(const Model& model, Index i, State& state, DynamicsMemory& memory) {
+void predict_object(const Model& model, Index i, State& state, DynamicsMemory& memory, CellFit fit) {
   const ObjectModel& obj = model.objects[i];
   if (obj.dynamics == DynamicsKind::MassSpring) {
-    memory.object_solve[i] = predict_mass_spring(model, obj, state.params.stiffness[i], state, memory);
+    memory.object_solve[i] = predict_mass_spring(model, obj, state.params.stiffness[i], state, memory, fit);
     nodes_to_records(obj, state, memory);
     return;
   }
@@ -507,7 +533,7 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
     parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
       const Index i = memory.object_tasks[task];
       const ObjectModel& obj = model.objects[i];
-      predict_object(model, i, state, memory);
+      predict_object(model, i, state, memory, CellFit::InTask);
       if (obj.dynamics == DynamicsKind::MassSpring)
         for (int it = 0; it < obj.mass_spring.iterations; ++it) sweep_object(model, obj, memory.object_solve[i], state, memory);
       finish_object(model, i, state, memory, ShapeMatchingVelocity::Kept);
@@ -515,8 +541,10 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
     end_trial_step(memory);
     return;
   }
-  parallel_for(pool, memory.object_task_count,
-               [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    predict_object(model, memory.object_tasks[task], state, memory, CellFit::OverPool);
+  });
+  fit_cell_rotations_over_pool(model, state, memory, pool);
   const int iterations = dynamics_iterations(model);
   if (memory.cell_task_count == 0) {
     sweep_springs(model, 0, iterations, memory, pool);  // every sweep in one job
@@ -536,8 +564,10 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
 // takes its whole step here (it has no sweeps), its start kept in x_prev.
 void predict_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
   plan_step(state, memory, pool);
-  parallel_for(pool, memory.object_task_count,
-               [&](std::uint32_t task, std::uint32_t) { predict_object(model, memory.object_tasks[task], state, memory); });
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    predict_object(model, memory.object_tasks[task], state, memory, CellFit::OverPool);
+  });
+  fit_cell_rotations_over_pool(model, state, memory, pool);
 }
 
 int dynamics_iterations(const Model& model) {
