@@ -23,7 +23,9 @@ packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplus
           # CGAL: exact triangle-triangle tests for the surface-intersection measure
           libcgal-dev
           # the Python reference bridge of the device link (ui/device/bridges), run by the tests
-          python3)
+          python3
+          # GNU parallel: ffdsim sweep's jobs over cores or ssh hosts (the tests run a sweep through it)
+          parallel)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

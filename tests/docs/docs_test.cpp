@@ -183,9 +183,20 @@ TEST_CASE("Docs: the command-line reference names every command and option, and 
     CHECK(readme.find("ffdsim " + command) != std::string::npos);  // the README's tour
     const test::ProgramResult help = test::run_ffdsim(command + " --help");
     REQUIRE(help.exit_code == 0);
+    // A command with commands of its own (`ffdsim sweep plan`, ...): their options too.
+    std::string helps = help.output;
+    if (const std::size_t own = help.output.find("Subcommands:"); own != std::string::npos) {
+      const std::string list = help.output.substr(own);
+      for (auto it = std::sregex_iterator(list.begin(), list.end(), command_line); it != std::sregex_iterator(); ++it) {
+        const test::ProgramResult sub = test::run_ffdsim(command + " " + std::string((*it)[1]) + " --help");
+        REQUIRE(sub.exit_code == 0);
+        CHECK(reference.find("ffdsim " + command + " " + std::string((*it)[1])) != std::string::npos);
+        helps += sub.output;
+      }
+    }
     std::set<std::string> accepted;
     const std::regex option(R"((--[a-z][a-z0-9-]*))");
-    for (auto it = std::sregex_iterator(help.output.begin(), help.output.end(), option); it != std::sregex_iterator(); ++it)
+    for (auto it = std::sregex_iterator(helps.begin(), helps.end(), option); it != std::sregex_iterator(); ++it)
       accepted.insert((*it)[1]);
     for (const std::string& o : accepted) {
       if (o == "--help") continue;

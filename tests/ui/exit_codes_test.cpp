@@ -24,7 +24,7 @@ void check_exit(const std::string& arguments, int expected, const std::string& s
 }  // namespace
 
 TEST_CASE("Exit codes: the program without a known command is a usage error, --help succeeds", "[cli]") {
-  check_exit("", 1, "a command is required (simulate, replay, run, bench, accuracy, piles, hard-cases, device-sim)");
+  check_exit("", 1, "a command is required (simulate, replay, run, bench, accuracy, piles, hard-cases, device-sim, sweep)");
   check_exit("frobnicate", 1, "unknown command 'frobnicate'");
   check_exit("--frobnicate", 1, "unknown option '--frobnicate'");
   check_exit("--help", 0, "simulate");

@@ -137,6 +137,14 @@ struct PilesOptions {
 void register_piles(CLI::App& app, PilesOptions& options);
 int run_piles_command(const PilesOptions& options);
 
+struct SweepOptions {
+  std::string sweep_file, dir, id, out;
+  int jobs = 2;
+  bool force = false, retry_failed = false, quiet = false;
+};
+void register_sweep(CLI::App& app, SweepOptions& options);
+int run_sweep_command(const CLI::App& app, const SweepOptions& options);
+
 struct HardCasesOptions {
   std::vector<std::string> scripts;  // replay scripts or folders; empty: scenarios/replays/hard
   std::vector<std::string> responses = {"paper", "solver"};

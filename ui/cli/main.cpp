@@ -93,6 +93,8 @@ int main(int argc, char** argv) {
   ffdsim::register_hard_cases(app, hard_cases);
   ffdsim::DeviceSimOptions device_sim;
   ffdsim::register_device_sim(app, device_sim);
+  ffdsim::SweepOptions sweep;
+  ffdsim::register_sweep(app, sweep);
   // A first word that is no option must name a command: say which word, not only that a
   // command is missing.
   if (argc < 2) {
@@ -124,5 +126,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("accuracy")) return ffdsim::run_accuracy_command(accuracy);
   if (app.got_subcommand("piles")) return ffdsim::run_piles_command(piles);
   if (app.got_subcommand("hard-cases")) return ffdsim::run_hard_cases_command(hard_cases);
+  if (app.got_subcommand("sweep")) return ffdsim::run_sweep_command(app, sweep);
   return ffdsim::kExitUsage;
 }

@@ -1,0 +1,689 @@
+// Sweep files -> SweepPlan, the plan's folder, and the merge of its results (docs/sweeps.md).
+// Strict like the scene and replay readers: errors name file:line:col and the field.
+#include "ffd/sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "ffd/replay_runner.h"
+
+namespace ffd {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string_view> kRootKeys = {"format", "version", "description", "replay", "threads",
+                                                 "parameters", "point"};
+const std::vector<std::string_view> kRangeKeys = {"from", "to", "count"};
+
+enum class ValueKind { Number, Integer, Flag, Name };
+
+// A parameter a sweep may vary: a key of the scene's [simulation] table, or of every
+// mass-spring object's [mass_spring] table ("stiffness"; "NAME.stiffness" for one object).
+struct ParameterDef {
+  std::string_view name;
+  ValueKind kind;
+  Bounds bounds;                     // numbers and integers
+  std::vector<std::string_view> names;  // Name: the values allowed
+  bool per_object;
+  std::optional<CommandKind> command;   // the live command that also sets it, if any
+  std::function<void(SimulationSettings&, const SweepValue&)> set_simulation;
+  std::function<void(MassSpringParams&, const SweepValue&)> set_object;
+};
+
+double number_of(const SweepValue& v) {
+  if (const auto* d = std::get_if<double>(&v)) return *d;
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return static_cast<double>(*i);
+  return 0.0;
+}
+
+const std::vector<ParameterDef>& parameter_defs() {
+  static const std::vector<ParameterDef> defs = [] {
+    std::vector<ParameterDef> d;
+    const auto sim = [&](std::string_view name, ValueKind kind, Bounds bounds,
+                         std::function<void(SimulationSettings&, const SweepValue&)> set,
+                         std::vector<std::string_view> names = {}) {
+      d.push_back({name, kind, bounds, std::move(names), false, std::nullopt, std::move(set), {}});
+    };
+    const auto obj = [&](std::string_view name, ValueKind kind, Bounds bounds,
+                         std::function<void(MassSpringParams&, const SweepValue&)> set) {
+      d.push_back({name, kind, bounds, {}, true, std::nullopt, {}, std::move(set)});
+    };
+    sim("alpha", ValueKind::Number, kUnitInterval, [](SimulationSettings& s, const SweepValue& v) { s.alpha = number_of(v); });
+    sim("beta", ValueKind::Number, kUnitInterval, [](SimulationSettings& s, const SweepValue& v) { s.beta = number_of(v); });
+    sim("accuracy", ValueKind::Integer, Bounds{0, kAccuracyLevels - 1},
+        [](SimulationSettings& s, const SweepValue& v) { s.accuracy = static_cast<Accuracy>(std::get<std::int64_t>(v)); });
+    sim(
+        "response", ValueKind::Name, kAnyValue,
+        [](SimulationSettings& s, const SweepValue& v) { response_from_name(std::get<std::string>(v), s.response); },
+        {"paper", "solver"});
+    sim("rolling_resistance", ValueKind::Number, kNonNegative,
+        [](SimulationSettings& s, const SweepValue& v) { s.rolling_resistance = number_of(v); });
+    sim("seed", ValueKind::Integer, Bounds{0, 9.0e15},
+        [](SimulationSettings& s, const SweepValue& v) { s.seed = static_cast<std::uint64_t>(std::get<std::int64_t>(v)); });
+    sim("edge_contacts", ValueKind::Flag, kAnyValue,
+        [](SimulationSettings& s, const SweepValue& v) { s.edge_contacts = std::get<bool>(v); });
+    sim("box_overlap", ValueKind::Flag, kAnyValue,
+        [](SimulationSettings& s, const SweepValue& v) { s.box_overlap = std::get<bool>(v); });
+    sim("probe_stiffness", ValueKind::Number, kNonNegative,
+        [](SimulationSettings& s, const SweepValue& v) { s.probe.coupling_stiffness = number_of(v); });
+    obj("stiffness", ValueKind::Number, kPositive, [](MassSpringParams& p, const SweepValue& v) { p.stiffness = number_of(v); });
+    obj("damping", ValueKind::Number, kNonNegative, [](MassSpringParams& p, const SweepValue& v) { p.damping = number_of(v); });
+    obj("iterations", ValueKind::Integer, Bounds{1, 100},
+        [](MassSpringParams& p, const SweepValue& v) { p.iterations = static_cast<int>(std::get<std::int64_t>(v)); });
+    obj("shape_stiffness", ValueKind::Number, kNonNegative,
+        [](MassSpringParams& p, const SweepValue& v) { p.shape_stiffness = number_of(v); });
+    obj("bulk_modulus", ValueKind::Number, kNonNegative,
+        [](MassSpringParams& p, const SweepValue& v) { p.bulk_modulus = number_of(v); });
+    const std::pair<std::string_view, CommandKind> live[] = {
+        {"alpha", CommandKind::SetAlpha},         {"beta", CommandKind::SetBeta},
+        {"accuracy", CommandKind::SetAccuracy},   {"response", CommandKind::SetResponse},
+        {"stiffness", CommandKind::SetStiffness}, {"probe_stiffness", CommandKind::SetProbeStiffness}};
+    for (ParameterDef& def : d)
+      for (const auto& [name, kind] : live)
+        if (def.name == name) def.command = kind;
+    return d;
+  }();
+  return defs;
+}
+
+// "stiffness" -> (stiffness, all objects); "teapot_low.stiffness" -> (stiffness, teapot_low).
+struct ParameterName {
+  const ParameterDef* def = nullptr;
+  std::string object;  // empty: every mass-spring object
+};
+
+std::optional<ParameterName> find_parameter(std::string_view name) {
+  std::string_view key = name, object;
+  if (const std::size_t dot = name.rfind('.'); dot != std::string_view::npos) {
+    object = name.substr(0, dot);
+    key = name.substr(dot + 1);
+  }
+  for (const ParameterDef& def : parameter_defs())
+    if (def.name == key && (object.empty() || def.per_object)) return ParameterName{&def, std::string(object)};
+  return std::nullopt;
+}
+
+std::vector<std::string_view> parameter_keys() {
+  std::vector<std::string_view> keys;
+  for (const ParameterDef& def : parameter_defs()) keys.push_back(def.name);
+  return keys;
+}
+
+// A table's parameters as (name, value node) in the file's order: "alpha = ...", and an
+// object's own as "high.stiffness = ..." (TOML's dotted keys make that a table "high").
+struct NamedNode {
+  std::string name;
+  const toml::node* node;
+};
+
+bool before(const toml::node* a, const toml::node* b) {
+  const auto& sa = a->source().begin;
+  const auto& sb = b->source().begin;
+  return sa.line != sb.line ? sa.line < sb.line : sa.column < sb.column;
+}
+
+class SweepReader {
+ public:
+  SweepReader(const std::string& origin, const std::string& base_dir) : origin_(origin), base_dir_(base_dir) {}
+
+  SweepPlan read(const toml::table& root_table) {
+    const TableReader root(origin_, root_table, "", kRootKeys);
+    SweepPlan plan;
+    plan.sweep_file = origin_.empty() ? origin_ : fs::absolute(origin_).lexically_normal().string();
+    if (const auto format = root.string("format"); format && *format != "ffdsim-sweep")
+      root.fail_at("format", "expected \"ffdsim-sweep\" (got " + in_quotes(*format) + ")");
+    if (!root.has("version")) root.fail_missing("version", " (this program reads version = 1)");
+    const std::int64_t version = root.integer("version", 0, 1, std::numeric_limits<std::int64_t>::max());
+    if (version != kSweepFormatVersion)
+      root.fail_at("version", "this program reads version " + std::to_string(kSweepFormatVersion) + " (got " +
+                                  std::to_string(version) + ")");
+    plan.description = root.string("description").value_or("");
+    const auto replay = root.string("replay");
+    if (!replay) root.fail_missing("replay", " (the replay script every job runs)");
+    plan.replay = (fs::path(base_dir_) / *replay).lexically_normal().string();
+    plan.replay = fs::absolute(plan.replay).lexically_normal().string();
+    plan.threads = static_cast<int>(root.integer("threads", 1, 1, 64));
+    const bool grid = root.has("parameters"), points = root.has("point");
+    if (grid == points)
+      root.fail_here("parameters", grid ? "give either [parameters] (a grid) or [[point]] (a list), not both"
+                                        : "missing: [parameters] (a grid of values) or [[point]] (a list of points)");
+    if (grid) read_grid(root, plan);
+    else read_points(root, plan);
+    return plan;
+  }
+
+ private:
+  // One value of parameter `name` from a TOML node, checked against its kind and range.
+  SweepValue value(const TableReader& table, const ParameterName& p, const toml::node& node, const std::string& field) {
+    const ParameterDef& def = *p.def;
+    switch (def.kind) {
+      case ValueKind::Number: return table.to_number(node, field, def.bounds);
+      case ValueKind::Integer: {
+        const auto* i = node.as_integer();
+        if (!i) table.fail(node.source(), field, "expected an integer (got " + describe_type(node) + ")");
+        if (!def.bounds.contains(static_cast<double>(i->get())))
+          table.fail(node.source(), field, "must be " + def.bounds.describe() + " (got " + std::to_string(i->get()) + ")");
+        return i->get();
+      }
+      case ValueKind::Flag: {
+        const auto* b = node.as_boolean();
+        if (!b) table.fail(node.source(), field, "expected true or false (got " + describe_type(node) + ")");
+        return b->get();
+      }
+      case ValueKind::Name: {
+        const auto* s = node.as_string();
+        if (!s) table.fail(node.source(), field, "expected a string (got " + describe_type(node) + ")");
+        if (std::find(def.names.begin(), def.names.end(), s->get()) == def.names.end())
+          table.fail(node.source(), field, "must be one of " + join(def.names) + " (got " + in_quotes(s->get()) + ")");
+        return s->get();
+      }
+    }
+    return 0.0;
+  }
+
+  [[noreturn]] void not_a_parameter(const TableReader& table, const std::string& name, const toml::node& node) {
+    std::string hint;
+    const std::string_view key = std::string_view(name).substr(name.rfind('.') == std::string::npos ? 0 : name.rfind('.') + 1);
+    if (const auto near = closest_match(key, parameter_keys())) hint = "; did you mean " + in_quotes(*near) + "?";
+    table.fail(node.source(), table.field(name),
+               "not a parameter a sweep can vary (" + join(parameter_keys()) + ", or OBJECT.key for one object's " +
+                   "stiffness, damping, iterations, shape_stiffness or bulk_modulus)" + hint);
+  }
+
+  // The parameters of `table`, flattened and in the file's order.
+  std::vector<NamedNode> parameters_of(const TableReader& reader) {
+    std::vector<NamedNode> out;
+    for (auto&& [key, node] : reader.table()) {
+      const std::string name(key.str());
+      if (find_parameter(name)) {
+        out.push_back({name, &node});
+        continue;
+      }
+      const auto* object = node.as_table();
+      if (!object || object->empty()) not_a_parameter(reader, name, node);
+      for (auto&& [sub, sub_node] : *object) {
+        const std::string scoped = name + "." + std::string(sub.str());
+        const auto p = find_parameter(scoped);
+        if (!p) not_a_parameter(reader, scoped, sub_node);
+        out.push_back({scoped, &sub_node});
+      }
+    }
+    std::sort(out.begin(), out.end(), [](const NamedNode& a, const NamedNode& b) { return before(a.node, b.node); });
+    return out;
+  }
+
+  // [parameters]: each key a list of values or {from, to, count}; the grid of all of them,
+  // the last parameter varying fastest.
+  void read_grid(const TableReader& root, SweepPlan& plan) {
+    const toml::table& table = *root.subtable("parameters");
+    std::vector<std::string_view> keys;
+    for (auto&& [key, node] : table) keys.push_back(key.str());
+    const TableReader reader(origin_, table, "parameters", keys);
+    const std::vector<NamedNode> named = parameters_of(reader);
+    if (named.empty()) reader.fail_here("parameters", "names no parameter");
+    std::vector<std::vector<SweepValue>> axes;
+    for (const NamedNode& n : named) {
+      const ParameterName p = *find_parameter(n.name);
+      const toml::node& node = *n.node;
+      const std::string field = reader.field(n.name);
+      std::vector<SweepValue> values;
+      if (const auto* array = node.as_array()) {
+        for (std::size_t i = 0; i < array->size(); ++i)
+          values.push_back(value(reader, p, *array->get(i), field + "[" + std::to_string(i) + "]"));
+      } else if (const auto* range = node.as_table()) {
+        if (p.def->kind != ValueKind::Number)
+          reader.fail(node.source(), field, "a range {from, to, count} is for numbers; list the values instead");
+        const TableReader r(origin_, *range, field, kRangeKeys);
+        const double from = r.required_number("from", p.def->bounds), to = r.required_number("to", p.def->bounds);
+        if (!r.has("count")) r.fail_missing("count");
+        const std::int64_t count = r.integer("count", 0, 1, static_cast<std::int64_t>(kMaxSweepJobs));
+        if (count == 1 && from != to) r.fail_at("count", "must be at least 2 for a range from " + format_number(from) +
+                                                            " to " + format_number(to));
+        for (std::int64_t i = 0; i < count; ++i)
+          values.push_back(count == 1 ? from
+                                      : (from * static_cast<double>(count - 1 - i) + to * static_cast<double>(i)) /
+                                            static_cast<double>(count - 1));  // the ends exact
+      } else {
+        reader.fail(node.source(), field, "expected a list of values or a range {from, to, count} (got " + describe_type(node) + ")");
+      }
+      if (values.empty()) reader.fail(node.source(), field, "names no value");
+      plan.parameters.push_back(n.name);
+      axes.push_back(std::move(values));
+    }
+    double jobs = 1.0;
+    for (const auto& axis : axes) jobs *= static_cast<double>(axis.size());
+    if (jobs > static_cast<double>(kMaxSweepJobs))
+      reader.fail_here("parameters", "a grid of " + format_number(jobs) + " jobs; at most " + std::to_string(kMaxSweepJobs));
+    std::vector<std::size_t> at(axes.size(), 0);
+    for (std::size_t j = 0; j < static_cast<std::size_t>(jobs); ++j) {
+      SweepJob job;
+      for (std::size_t a = 0; a < axes.size(); ++a) job.values.push_back(axes[a][at[a]]);
+      plan.jobs.push_back(std::move(job));
+      for (std::size_t a = axes.size(); a-- > 0;) {
+        if (++at[a] < axes[a].size()) break;
+        at[a] = 0;
+      }
+    }
+    number_jobs(plan);
+  }
+
+  // [[point]]: each point the same parameters, a value each.
+  void read_points(const TableReader& root, SweepPlan& plan) {
+    const toml::node& node = *root.find("point");
+    const auto* array = node.as_array();
+    if (!array || !array->is_array_of_tables())
+      root.fail_at("point", "expected [[point]] tables (got " + describe_type(node) + ")");
+    if (array->size() > kMaxSweepJobs)
+      root.fail_at("point", std::to_string(array->size()) + " points; at most " + std::to_string(kMaxSweepJobs));
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const toml::table& point = *array->get(i)->as_table();
+      std::vector<std::string_view> keys;
+      for (auto&& [key, v] : point) keys.push_back(key.str());
+      const TableReader reader(origin_, point, "point[" + std::to_string(i) + "]", keys);
+      const std::vector<NamedNode> named = parameters_of(reader);
+      if (i == 0) {
+        if (named.empty()) reader.fail_here(reader.path(), "names no parameter");
+        for (const NamedNode& n : named) plan.parameters.push_back(n.name);
+      }
+      const std::string first = join(std::vector<std::string_view>(plan.parameters.begin(), plan.parameters.end()));
+      SweepJob job;
+      for (const std::string& name : plan.parameters) {
+        const auto it = std::find_if(named.begin(), named.end(), [&](const NamedNode& n) { return n.name == name; });
+        if (it == named.end())
+          reader.fail_here(reader.field(name), "missing required key (every point gives the parameters of the first: " + first + ")");
+        job.values.push_back(value(reader, *find_parameter(name), *it->node, reader.field(name)));
+      }
+      for (const NamedNode& n : named)
+        if (std::find(plan.parameters.begin(), plan.parameters.end(), n.name) == plan.parameters.end())
+          reader.fail(n.node->source(), reader.field(n.name), "not a parameter of the first point (" + first + ")");
+      plan.jobs.push_back(std::move(job));
+    }
+    if (plan.jobs.empty()) root.fail_at("point", "names no point");
+    number_jobs(plan);
+  }
+
+  static void number_jobs(SweepPlan& plan) {
+    const std::size_t width = std::max<std::size_t>(4, std::to_string(plan.jobs.size()).size());
+    for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
+      std::string id = std::to_string(j + 1);
+      plan.jobs[j].id = std::string(width - id.size(), '0') + id;
+    }
+  }
+
+  std::string origin_, base_dir_;
+};
+
+nlohmann::json value_json(const SweepValue& v) {
+  return std::visit([](const auto& x) { return nlohmann::json(x); }, v);
+}
+
+SweepValue value_from_json(const nlohmann::json& j, const std::string& where) {
+  if (j.is_boolean()) return j.get<bool>();
+  if (j.is_number_integer()) return j.get<std::int64_t>();
+  if (j.is_number_float()) return j.get<double>();
+  if (j.is_string()) return j.get<std::string>();
+  throw InputError(where + ": a parameter value is neither a number, a flag nor a name");
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write");
+}
+
+std::string shell_quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace
+
+std::string sweep_value_text(const SweepValue& value) {
+  if (const auto* d = std::get_if<double>(&value)) return format_number(*d);
+  if (const auto* i = std::get_if<std::int64_t>(&value)) return std::to_string(*i);
+  if (const auto* b = std::get_if<bool>(&value)) return *b ? "true" : "false";
+  return std::get<std::string>(value);
+}
+
+std::vector<std::string> sweep_parameter_names() {
+  std::vector<std::string> names;
+  for (const ParameterDef& def : parameter_defs()) names.emplace_back(def.name);
+  return names;
+}
+
+SweepPlan parse_sweep(const std::string& text, const std::string& origin, const std::string& base_dir) {
+  return SweepReader(origin, base_dir).read(parse_toml(text, origin));
+}
+
+SweepPlan load_sweep_file(const std::string& path) {
+  return parse_sweep(read_text_file(path, "sweep file"), path, fs::path(path).parent_path().string());
+}
+
+LoadedReplay load_sweep_job(const SweepPlan& plan, const SweepJob& job) {
+  std::optional<ContactResponse> response;
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i)
+    if (plan.parameters[i] == "response") response_from_name(std::get<std::string>(job.values[i]), response.emplace());
+  LoadedReplay replay = load_replay_file(plan.replay, {}, RecordedScene::MustMatch, response);
+  SceneSpec& scene = replay.script.scene;
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i) {
+    const std::string& name = plan.parameters[i];
+    const auto p = find_parameter(name);
+    if (!p) throw InputError(plan.sweep_file + ": " + name + ": not a parameter a sweep can vary");
+    if (!p->def->per_object) {
+      p->def->set_simulation(scene.settings, job.values[i]);
+      continue;
+    }
+    bool found = false;
+    for (ObjectSpec& object : scene.objects) {
+      if (!p->object.empty() && object.name != p->object) continue;
+      found = true;
+      if (object.dynamics == DynamicsKind::MassSpring) p->def->set_object(object.mass_spring, job.values[i]);
+    }
+    if (!found) {
+      std::vector<std::string_view> names;
+      for (const ObjectSpec& object : scene.objects) names.push_back(object.name);
+      throw InputError(plan.sweep_file + ": " + name + ": the replay's scene has no object " + in_quotes(p->object) +
+                       " (its objects: " + join(names) + ")");
+    }
+  }
+  // A parameter the replay's own commands set would hold only until the first of them: refused.
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i) {
+    const auto p = find_parameter(plan.parameters[i]);
+    if (!p->def->command) continue;
+    for (const Command& c : replay.script.commands)
+      if (c.kind == *p->def->command) {
+        throw InputError(plan.sweep_file + ": " + plan.parameters[i] + ": the replay " + plan.replay +
+                         " sets it itself (a " + command_name(c.kind) + " command at step " + std::to_string(c.step) +
+                         "), which would override the sweep's value: sweep another parameter or a replay without it");
+      }
+  }
+  std::vector<std::string> log;
+  replay.model = compile(scene, log);
+  replay.script.hashes.clear();  // the point's state is its own: reported, not checked
+  return replay;
+}
+
+std::string sweep_result_path(const std::string& dir, const std::string& id) {
+  return (fs::path(dir) / "results" / (id + ".json")).string();
+}
+
+void write_file_atomically(const std::string& path, const std::string& text) {
+  const fs::path target(path);
+  const fs::path temporary = target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  write_text(temporary, text);
+  std::error_code error;
+  fs::rename(temporary, target, error);
+  if (error) {
+    fs::remove(temporary, error);
+    throw std::runtime_error(path + ": cannot write (" + error.message() + ")");
+  }
+}
+
+void write_sweep_plan(const SweepPlan& plan, const std::string& dir, const std::string& program) {
+  const fs::path folder = fs::absolute(dir).lexically_normal();
+  fs::create_directories(folder / "results");
+  fs::create_directories(folder / "logs");
+  nlohmann::json j;
+  j["format"] = "ffdsim-sweep-plan";
+  j["version"] = kSweepFormatVersion;
+  j["sweep_file"] = plan.sweep_file;
+  j["replay"] = plan.replay;
+  j["description"] = plan.description;
+  j["threads"] = plan.threads;
+  j["parameters"] = plan.parameters;
+  j["jobs"] = nlohmann::json::array();
+  for (const SweepJob& job : plan.jobs) {
+    nlohmann::json values = nlohmann::json::array();
+    for (const SweepValue& v : job.values) values.push_back(value_json(v));
+    j["jobs"].push_back({{"id", job.id}, {"values", values}});
+  }
+  write_file_atomically((folder / "plan.json").string(), j.dump(1) + "\n");
+  std::ostringstream tsv;
+  tsv << "id";
+  for (const std::string& name : plan.parameters) tsv << '\t' << name;
+  tsv << '\n';
+  for (const SweepJob& job : plan.jobs) {
+    tsv << job.id;
+    for (const SweepValue& v : job.values) tsv << '\t' << sweep_value_text(v);
+    tsv << '\n';
+  }
+  write_file_atomically((folder / "jobs.tsv").string(), tsv.str());
+  const std::string quoted_dir = shell_quoted(folder.string()), quoted_program = shell_quoted(program);
+  std::ostringstream sbatch;
+  sbatch << "#!/bin/bash\n"
+         << "# A Slurm job array: one array task per job of jobs.tsv (ffdsim sweep plan wrote it).\n"
+         << "#SBATCH --job-name=ffdsim-sweep\n"
+         << "#SBATCH --array=1-" << plan.jobs.size() << "\n"
+         << "#SBATCH --cpus-per-task=" << plan.threads << "\n"
+         << "#SBATCH --output=" << (folder / "logs" / "slurm-%A_%a.out").string() << "\n"
+         << "id=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" " << quoted_dir << "/jobs.tsv | cut -f1)\n"
+         << "exec " << quoted_program << " sweep run-one " << quoted_dir << " \"$id\"\n";
+  write_file_atomically((folder / "sweep.sbatch").string(), sbatch.str());
+  std::ostringstream parallel;
+  parallel << "#!/bin/sh\n"
+           << "# GNU parallel: every job of jobs.tsv, as many at once as parallel runs (--jobs N to say).\n"
+           << "tail -n +2 " << quoted_dir << "/jobs.tsv | cut -f1 | parallel \"$@\" " << quoted_program << " sweep run-one "
+           << quoted_dir << " {}\n";
+  write_file_atomically((folder / "parallel.sh").string(), parallel.str());
+  fs::permissions(folder / "parallel.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
+}
+
+SweepPlan read_sweep_plan(const std::string& dir) {
+  const std::string path = (fs::path(dir) / "plan.json").string();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_text_file(path, "sweep plan"));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not a sweep plan (" + e.what() + ")");
+  }
+  try {
+    if (j.value("format", "") != "ffdsim-sweep-plan") throw InputError(path + ": not a sweep plan (format)");
+    SweepPlan plan;
+    plan.sweep_file = j.at("sweep_file").get<std::string>();
+    plan.replay = j.at("replay").get<std::string>();
+    plan.description = j.value("description", "");
+    plan.threads = j.value("threads", 1);
+    plan.parameters = j.at("parameters").get<std::vector<std::string>>();
+    for (const nlohmann::json& job : j.at("jobs")) {
+      SweepJob out;
+      out.id = job.at("id").get<std::string>();
+      for (const nlohmann::json& v : job.at("values")) out.values.push_back(value_from_json(v, path));
+      if (out.values.size() != plan.parameters.size()) throw InputError(path + ": job " + out.id + ": wrong number of values");
+      plan.jobs.push_back(std::move(out));
+    }
+    return plan;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not a sweep plan (" + e.what() + ")");
+  }
+}
+
+const SweepJob* find_sweep_job(const SweepPlan& plan, const std::string& id) {
+  for (const SweepJob& job : plan.jobs)
+    if (job.id == id) return &job;
+  return nullptr;
+}
+
+const char* job_state_name(JobState state) {
+  switch (state) {
+    case JobState::Done: return "done";
+    case JobState::Failed: return "failed";
+    case JobState::Missing: return "missing";
+  }
+  return "missing";
+}
+
+namespace {
+// A result's parameters as the plan would write them: what "matches the plan" compares.
+nlohmann::json job_values_json(const SweepPlan& plan, const SweepJob& job) {
+  nlohmann::json values = nlohmann::json::object();
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i) values[plan.parameters[i]] = value_json(job.values[i]);
+  return values;
+}
+
+std::optional<nlohmann::json> read_result(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;  // not one of ours (results are written whole): missing
+  }
+}
+}  // namespace
+
+JobState sweep_job_state(const SweepPlan& plan, const std::string& dir, const SweepJob& job) {
+  const auto result = read_result(sweep_result_path(dir, job.id));
+  if (!result || !result->is_object() || result->value("replay", "") != plan.replay ||
+      result->value("parameters", nlohmann::json()) != job_values_json(plan, job))
+    return JobState::Missing;
+  return result->value("state", "") == "done" ? JobState::Done : JobState::Failed;
+}
+
+namespace {
+nlohmann::json job_record(const SweepPlan& plan, const SweepJob& job) {
+  nlohmann::json j;
+  j["id"] = job.id;
+  j["replay"] = plan.replay;
+  j["parameters"] = job_values_json(plan, job);
+  j["ffdsim"] = ffdsim_version();
+  return j;
+}
+}  // namespace
+
+std::string sweep_job_result_json(const SweepPlan& plan, const SweepJob& job, const LoadedReplay& replay,
+                                  const ReplayResult& result) {
+  nlohmann::json j = job_record(plan, job);
+  const bool passed = result.passed() && result.finite;
+  j["state"] = passed ? "done" : "failed";
+  j["exit_code"] = passed ? 0 : !result.finite ? kSweepExitDiverged : kSweepExitAssertionFailed;
+  if (!result.finite)
+    j["error"] = "the simulation produced a non-finite value at step " +
+                 std::to_string(result.first_non_finite_step.value_or(result.steps));
+  const std::string& scene = replay.script.scene_origin;
+  j["scene"] = scene;
+  std::error_code error;
+  j["scene_hash"] = fs::is_regular_file(scene, error) ? content_hash_of_file(scene) : content_hash_of_file(plan.replay);
+  std::size_t failed = 0;
+  nlohmann::json assertions = nlohmann::json::array();
+  for (const AssertionResult& a : result.assertions) {
+    failed += !a.skipped && !a.passed ? 1 : 0;
+    assertions.push_back({{"name", a.name}, {"where", a.where}, {"passed", a.passed}, {"skipped", a.skipped},
+                          {"measured", a.measured}, {"limit", a.limit}});
+  }
+  j["assertions"] = assertions;
+  char hash[17];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(result.final_hash));
+  j["metrics"] = {{"assertions_failed", failed},
+                  {"finite", result.finite ? 1 : 0},
+                  {"max_penetration_m", result.max_penetration_m},
+                  {"mean_contacts", result.mean_contacts},
+                  {"peak_force_n", result.peak_force_n},
+                  {"max_speed_m_s", result.max_speed_m_s},
+                  {"energy_rise_j", result.max_energy_j - result.initial_energy_j},
+                  {"step_p50_us", result.latency.compute.p50_us},
+                  {"step_p99_us", result.latency.compute.p99_us},
+                  {"final_state_hash", std::string(hash)}};
+  return j.dump(1) + "\n";
+}
+
+std::string sweep_job_failure_json(const SweepPlan& plan, const SweepJob& job, int exit_code, const std::string& why) {
+  nlohmann::json j = job_record(plan, job);
+  j["state"] = "failed";
+  j["exit_code"] = exit_code;
+  j["error"] = why;
+  return j.dump(1) + "\n";
+}
+
+SweepMerge merge_sweep(const std::string& dir) {
+  const SweepPlan plan = read_sweep_plan(dir);
+  SweepMerge merge;
+  // The metrics, in the order the first result lists them.
+  std::vector<std::string> metrics;
+  std::vector<std::optional<nlohmann::json>> results;
+  for (const SweepJob& job : plan.jobs) {
+    const JobState state = sweep_job_state(plan, dir, job);
+    results.push_back(state == JobState::Missing ? std::nullopt : read_result(sweep_result_path(dir, job.id)));
+    ++(state == JobState::Done ? merge.done : state == JobState::Failed ? merge.failed : merge.missing);
+    if (results.back() && results.back()->contains("metrics"))
+      for (auto&& [name, value] : results.back()->at("metrics").items())
+        if (std::find(metrics.begin(), metrics.end(), name) == metrics.end()) metrics.push_back(name);
+  }
+  const auto metric_text = [](const nlohmann::json& v) -> std::string {
+    if (v.is_number_float()) return format_number(v.get<double>());
+    if (v.is_string()) return v.get<std::string>();
+    return v.dump();
+  };
+  std::ostringstream csv;
+  csv << "id";
+  for (const std::string& name : plan.parameters) csv << ',' << name;
+  csv << ",state,exit_code";
+  for (const std::string& name : metrics) csv << ',' << name;
+  csv << '\n';
+  for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
+    const SweepJob& job = plan.jobs[j];
+    csv << job.id;
+    for (const SweepValue& v : job.values) csv << ',' << sweep_value_text(v);
+    const std::optional<nlohmann::json>& r = results[j];
+    csv << ',' << (r ? r->value("state", "failed") : "missing") << ',' << (r ? std::to_string(r->value("exit_code", -1)) : "");
+    for (const std::string& name : metrics) {
+      csv << ',';
+      if (r && r->contains("metrics") && r->at("metrics").contains(name)) csv << metric_text(r->at("metrics").at(name));
+    }
+    csv << '\n';
+  }
+  merge.csv_path = (fs::path(dir) / "results.csv").string();
+  write_file_atomically(merge.csv_path, csv.str());
+
+  // The best point per numeric metric, among the jobs done (all assertions held).
+  std::ostringstream md;
+  md << "# Sweep: " << (plan.description.empty() ? fs::path(plan.sweep_file).filename().string() : plan.description)
+     << "\n\n- Sweep file: `" << plan.sweep_file << "`\n- Replay: `" << plan.replay << "`\n- Jobs: " << plan.jobs.size()
+     << " (" << merge.done << " done, " << merge.failed << " failed, " << merge.missing << " missing)\n\n"
+     << "The best point per metric among the jobs done (every assertion held): the lowest value.\n\n"
+     << "| metric | best | job |";
+  for (const std::string& name : plan.parameters) md << ' ' << name << " |";
+  md << "\n|---|---:|---|";
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i) md << "---:|";
+  md << '\n';
+  // The metrics where lower is better (the others, such as the contacts per step, describe a
+  // point without ranking it: they are in results.csv).
+  const std::vector<std::string> ranked = {"max_penetration_m", "max_speed_m_s", "energy_rise_j", "step_p99_us"};
+  for (const std::string& name : ranked) {
+    std::optional<std::size_t> best;
+    double best_value = 0.0;
+    for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
+      const std::optional<nlohmann::json>& r = results[j];
+      if (!r || r->value("state", "") != "done" || !r->contains("metrics") || !r->at("metrics").contains(name) ||
+          !r->at("metrics").at(name).is_number())
+        continue;
+      const double v = r->at("metrics").at(name).get<double>();
+      if (!best || v < best_value) best = j, best_value = v;
+    }
+    if (!best) continue;
+    char value[32];
+    std::snprintf(value, sizeof value, "%.4g", best_value);
+    md << "| " << name << " | " << value << " | " << plan.jobs[*best].id << " |";
+    for (const SweepValue& v : plan.jobs[*best].values) md << ' ' << sweep_value_text(v) << " |";
+    md << '\n';
+  }
+  merge.summary_path = (fs::path(dir) / "summary.md").string();
+  write_file_atomically(merge.summary_path, md.str());
+  return merge;
+}
+
+}  // namespace ffd
