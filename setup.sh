@@ -24,8 +24,9 @@ packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplus
           libcgal-dev
           # the Python reference bridge of the device link (ui/device/bridges), run by the tests
           python3
-          # GNU parallel: ffdsim sweep's jobs over cores or ssh hosts (the tests run a sweep through it)
-          parallel)
+          # ffdsim sweep's engines: GNU parallel (cores or ssh hosts) and Slurm (job arrays); the
+          # tests run a sweep through each, Slurm as a one-node cluster of their own
+          parallel slurm-wlm munge)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <cstdlib>
+#include <map>
 #include <set>
 #include <string>
 
@@ -245,4 +247,37 @@ TEST_CASE("ffdsim sweep: GNU parallel runs a plan's jobs to the same results as 
   }
   REQUIRE(test::run_ffdsim("sweep merge " + parallel + " -q").exit_code == 0);
   CHECK(fs::exists(fs::path(parallel) / "results.csv"));
+}
+
+// Run by ctest beside a one-node Slurm cluster of the tests' own (tests/slurm/cluster.sh, a
+// fixture), which SLURM_CONF names; hidden from a plain `ffd_tests` run.
+TEST_CASE("ffdsim sweep: a Slurm job array runs a plan's jobs to the same results as ffdsim sweep run",
+          "[sweep][cli][.slurm]") {
+  const char* conf = std::getenv("SLURM_CONF");
+  INFO("SLURM_CONF names the tests' cluster (ctest starts it: tests/slurm/cluster.sh)");
+  REQUIRE(conf != nullptr);
+  REQUIRE(fs::exists(conf));
+  const fs::path dir = test::fresh_temp_dir("sweep_slurm");
+  // The job array's tasks run as the cluster's user, on its node: the folder a path they can
+  // reach (here the same machine).
+  const std::string local = (dir / "local").string(), slurm = (dir / "slurm").string();
+  for (const std::string& out : {local, slurm})
+    REQUIRE(test::run_ffdsim("sweep plan " + kSweeps + "drop_alpha_beta.toml --out " + out + " -q").exit_code == 0);
+  REQUIRE(test::run_ffdsim("sweep run " + local + " --jobs 2 -q").exit_code == 0);
+  const test::ProgramResult r = test::run_shell("sbatch --wait " + slurm + "/sweep.sbatch");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.output, Catch::Contains("Submitted batch job"));
+  REQUIRE(test::run_ffdsim("sweep status " + slurm).exit_code == 0);
+  const auto a = simulation_results(local), b = simulation_results(slurm);
+  REQUIRE(b.size() == 9);
+  for (const auto& [id, j] : a) {
+    CHECK(j.at("metrics") == b.at(id).at("metrics"));
+    CHECK(j.at("parameters") == b.at(id).at("parameters"));
+  }
+  // The array's own logs, one per task.
+  int logs = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(slurm) / "logs"))
+    logs += entry.path().filename().string().rfind("slurm-", 0) == 0 ? 1 : 0;
+  CHECK(logs == 9);
 }
