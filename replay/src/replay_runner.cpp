@@ -168,6 +168,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   double rest_max_speed = 0.0;
   std::uint64_t rest_samples = 0, rest_worst_step = 0;
   Index rest_worst_object = 0;
+  std::optional<std::uint64_t> last_moving_step;  // the last step the nodes' RMS speed was at kRestRmsSpeed or above
 
   // The probe's work: the device moves by d_k - d_(k-1) at the start of step k against the
   // coupling force output F (the force on the device), so the device puts in
@@ -226,6 +227,7 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
         }
       }
       track(t.max_speed_m_s, result.max_speed_m_s, result.max_speed_step);
+      if (!(t.rms_speed_m_s < kRestRmsSpeed)) last_moving_step = t.step;
       if (t.step > script.motion.from_step) {
         ++motion_steps;
         track(t.rms_speed_m_s, motion_rms, motion_rms_step);
@@ -381,6 +383,11 @@ ReplayResult run_replay(const LoadedReplay& replay, const ReplayRunOptions& run_
   result.commands_rejected = counters.commands_rejected;
   result.latency.steps = result.steps;
   if (result.steps > 0) result.mean_contacts /= static_cast<double>(result.steps);
+  if (result.steps > 0 && (!last_moving_step || *last_moving_step < loop.state().step))
+    result.time_to_rest_s = static_cast<double>(last_moving_step.value_or(0)) * model.settings.dt;
+  for (const ForceWindowMeasure& m : force_windows)
+    if (m.steps > 0 && m.mean() > 0.0)
+      result.force_ripple = std::max(result.force_ripple.value_or(0.0), m.deviation() / m.mean());
   result.latency.compute = summarize_times(compute_ns);
   result.latency.lateness = summarize_times(lateness_ns);
   result.latency.deadline_misses = counters.deadline_misses;

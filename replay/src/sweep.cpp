@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -417,6 +418,106 @@ LoadedReplay load_sweep_job(const SweepPlan& plan, const SweepJob& job) {
   return replay;
 }
 
+namespace {
+// A value as TOML: what the scene loader reads for the parameter.
+void set_toml(toml::table& table, std::string_view key, const SweepValue& value, ValueKind kind) {
+  switch (kind) {
+    case ValueKind::Number: table.insert_or_assign(key, number_of(value)); break;
+    case ValueKind::Integer: table.insert_or_assign(key, std::get<std::int64_t>(value)); break;
+    case ValueKind::Flag: table.insert_or_assign(key, std::get<bool>(value)); break;
+    case ValueKind::Name: table.insert_or_assign(key, std::get<std::string>(value)); break;
+  }
+}
+
+toml::table& subtable(toml::table& table, std::string_view key) {
+  if (!table[key].is_table()) table.insert_or_assign(key, toml::table{});
+  return *table[key].as_table();
+}
+
+// Where a parameter lives in a scene file: [simulation] key, [probe] key, or an object's
+// [mass_spring] key.
+std::pair<std::string_view, std::string_view> scene_key(const ParameterDef& def) {
+  if (def.per_object) return {"mass_spring", def.name};
+  if (def.name == "probe_stiffness") return {"probe", "coupling_stiffness"};
+  return {"simulation", def.name};
+}
+}  // namespace
+
+std::string sweep_point_scene(const SweepPlan& plan, const SweepJob& job) {
+  const std::string replay_text = read_text_file(plan.replay, "replay script");
+  const toml::table replay = parse_toml(replay_text, plan.replay);
+  // The scene: the file the replay names (its paths relative to it), or its inline [scene].
+  toml::table scene;
+  fs::path base = fs::path(plan.replay).parent_path();
+  if (const auto* name = replay["scene"].as_string()) {
+    const fs::path path = (base / name->get()).lexically_normal();
+    scene = parse_toml(read_text_file(path.string(), "scene file"), path.string());
+    base = path.parent_path();
+  } else if (const auto* inline_scene = replay["scene"].as_table()) {
+    scene = *inline_scene;
+  } else {
+    throw InputError(plan.replay + ": names no scene");
+  }
+  const auto absolute = [&](toml::table& table, std::string_view key) {
+    if (const auto* path = table[key].as_string(); path && fs::path(path->get()).is_relative())
+      table.insert_or_assign(key, (base / path->get()).lexically_normal().string());
+  };
+  for (std::string_view list : {"object", "group"})
+    if (auto* tables = scene[list].as_array())
+      for (toml::node& node : *tables)
+        if (auto* t = node.as_table()) {
+          absolute(*t, "mesh");
+          if (auto* glyph = (*t)["glyph"].as_table()) absolute(*glyph, "font");
+        }
+  // The values: the replay's step-0 settings first, then the job's.
+  const LoadedReplay loaded = load_sweep_job(plan, job);  // checks the point as a job would
+  std::vector<std::pair<std::string, SweepValue>> values;
+  for (const Command& c : loaded.script.commands) {
+    if (c.step != 0) continue;
+    for (const ParameterDef& def : parameter_defs()) {
+      if (!def.command || *def.command != c.kind) continue;
+      SweepValue v = c.value;
+      if (def.kind == ValueKind::Integer) v = static_cast<std::int64_t>(c.value);
+      if (def.kind == ValueKind::Name) v = std::string(response_name(static_cast<ContactResponse>(static_cast<int>(c.value))));
+      std::string name(def.name);
+      if (def.per_object) name = loaded.model.objects[c.object].name + "." + name;
+      values.emplace_back(name, v);
+    }
+  }
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i) values.emplace_back(plan.parameters[i], job.values[i]);
+  for (const auto& [name, value] : values) {
+    const ParameterName p = *find_parameter(name);
+    const auto [table_name, key] = scene_key(*p.def);
+    if (!p.def->per_object) {
+      set_toml(subtable(scene, table_name), key, value, p.def->kind);
+      continue;
+    }
+    bool found = false;
+    if (auto* objects = scene["object"].as_array())
+      for (toml::node& node : *objects)
+        if (auto* t = node.as_table();
+            t && (p.object.empty() || (t->get_as<std::string>("name") && t->get_as<std::string>("name")->get() == p.object))) {
+          found = true;
+          if (t->contains("mass_spring")) set_toml(subtable(*t, "mass_spring"), key, value, p.def->kind);
+        }
+    if (auto* groups = scene["group"].as_array())
+      for (toml::node& node : *groups)
+        if (auto* t = node.as_table(); t && p.object.empty() && t->contains("mass_spring")) {
+          found = true;
+          set_toml(subtable(*t, "mass_spring"), key, value, p.def->kind);
+        }
+    if (!found)
+      throw InputError(plan.sweep_file + ": " + name + ": the object is made by a [[group]] of the scene, whose " +
+                       "objects share their keys: its own value cannot be written into a scene file");
+  }
+  std::ostringstream text;
+  text << "# The point " << job.id << " of the sweep " << plan.sweep_file << ":";
+  for (std::size_t i = 0; i < plan.parameters.size(); ++i)
+    text << ' ' << plan.parameters[i] << " = " << sweep_value_text(job.values[i]);
+  text << "\n# (ffdsim sweep wrote it from the replay " << plan.replay << ")\n" << scene << "\n";
+  return text.str();
+}
+
 std::string sweep_result_path(const std::string& dir, const std::string& id) {
   return (fs::path(dir) / "results" / (id + ".json")).string();
 }
@@ -566,8 +667,10 @@ nlohmann::json job_record(const SweepPlan& plan, const SweepJob& job) {
 }  // namespace
 
 std::string sweep_job_result_json(const SweepPlan& plan, const SweepJob& job, const LoadedReplay& replay,
-                                  const ReplayResult& result) {
+                                  const ReplayResult& result, double load_s, double run_s) {
   nlohmann::json j = job_record(plan, job);
+  j["load_s"] = load_s;
+  j["run_s"] = run_s;
   const bool passed = result.passed() && result.finite;
   j["state"] = passed ? "done" : "failed";
   j["exit_code"] = passed ? 0 : !result.finite ? kSweepExitDiverged : kSweepExitAssertionFailed;
@@ -598,6 +701,9 @@ std::string sweep_job_result_json(const SweepPlan& plan, const SweepJob& job, co
                   {"step_p50_us", result.latency.compute.p50_us},
                   {"step_p99_us", result.latency.compute.p99_us},
                   {"final_state_hash", std::string(hash)}};
+  // Measured only where they mean something: null otherwise (an empty cell in results.csv).
+  j["metrics"]["time_to_rest_s"] = result.time_to_rest_s ? nlohmann::json(*result.time_to_rest_s) : nlohmann::json();
+  j["metrics"]["force_ripple"] = result.force_ripple ? nlohmann::json(*result.force_ripple) : nlohmann::json();
   return j.dump(1) + "\n";
 }
 
@@ -607,6 +713,20 @@ std::string sweep_job_failure_json(const SweepPlan& plan, const SweepJob& job, i
   j["exit_code"] = exit_code;
   j["error"] = why;
   return j.dump(1) + "\n";
+}
+
+SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir) {
+  SweepTimes times;
+  for (const SweepJob& job : plan.jobs) {
+    if (sweep_job_state(plan, dir, job) == JobState::Missing) continue;
+    const std::optional<nlohmann::json> r = read_result(sweep_result_path(dir, job.id));
+    if (!r || !r->contains("run_s") || !r->contains("job_s")) continue;
+    const double run = r->at("run_s").get<double>(), whole = r->at("job_s").get<double>();
+    ++times.jobs;
+    times.run_s += run;
+    times.overhead_s += std::max(0.0, whole - run);
+  }
+  return times;
 }
 
 SweepMerge merge_sweep(const std::string& dir) {
@@ -624,6 +744,7 @@ SweepMerge merge_sweep(const std::string& dir) {
         if (std::find(metrics.begin(), metrics.end(), name) == metrics.end()) metrics.push_back(name);
   }
   const auto metric_text = [](const nlohmann::json& v) -> std::string {
+    if (v.is_null()) return "";
     if (v.is_number_float()) return format_number(v.get<double>());
     if (v.is_string()) return v.get<std::string>();
     return v.dump();
@@ -662,7 +783,8 @@ SweepMerge merge_sweep(const std::string& dir) {
   md << '\n';
   // The metrics where lower is better (the others, such as the contacts per step, describe a
   // point without ranking it: they are in results.csv).
-  const std::vector<std::string> ranked = {"max_penetration_m", "max_speed_m_s", "energy_rise_j", "step_p99_us"};
+  const std::vector<std::string> ranked = {"time_to_rest_s", "force_ripple", "max_penetration_m", "max_speed_m_s",
+                                           "energy_rise_j", "step_p99_us"};
   for (const std::string& name : ranked) {
     std::optional<std::size_t> best;
     double best_value = 0.0;
@@ -680,6 +802,49 @@ SweepMerge merge_sweep(const std::string& dir) {
     md << "| " << name << " | " << value << " | " << plan.jobs[*best].id << " |";
     for (const SweepValue& v : plan.jobs[*best].values) md << ' ' << sweep_value_text(v) << " |";
     md << '\n';
+  }
+  // Heat maps: each ranked metric over the first two numeric parameters; where the sweep has
+  // more, a cell shows the lowest value among the jobs done at its two values.
+  std::vector<std::size_t> axes;
+  for (std::size_t i = 0; i < plan.parameters.size() && axes.size() < 2; ++i)
+    if (!plan.jobs.empty() && (std::holds_alternative<double>(plan.jobs[0].values[i]) ||
+                               std::holds_alternative<std::int64_t>(plan.jobs[0].values[i])))
+      axes.push_back(i);
+  if (axes.size() == 2) {
+    const fs::path maps = fs::path(dir) / "heatmaps";
+    fs::create_directories(maps);
+    for (const std::string& name : ranked) {
+      std::map<std::pair<double, double>, double> cells;
+      for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
+        const std::optional<nlohmann::json>& r = results[j];
+        if (!r || r->value("state", "") != "done" || !r->contains("metrics") || !r->at("metrics").contains(name) ||
+            !r->at("metrics").at(name).is_number())
+          continue;
+        const std::pair<double, double> at{number_of(plan.jobs[j].values[axes[0]]), number_of(plan.jobs[j].values[axes[1]])};
+        const double v = r->at("metrics").at(name).get<double>();
+        const auto it = cells.find(at);
+        if (it == cells.end() || v < it->second) cells[at] = v;
+      }
+      if (cells.empty()) continue;
+      const std::string png = (maps / (name + ".png")).string();
+      std::ostringstream gp;
+      gp << "set terminal pngcairo size 720,560 font 'DejaVu Sans,10' noenhanced\n"
+         << "set output '" << png << "'\n"
+         << "set title '" << name << " (lower is better; blank: no job done there)'\n"
+         << "set xlabel '" << plan.parameters[axes[0]] << "'\nset ylabel '" << plan.parameters[axes[1]] << "'\n"
+         << "set palette rgb 33,13,10\nset offsets graph 0.08, graph 0.08, graph 0.08, graph 0.08\nset grid\n"
+         << "plot '-' using 1:2:3 with points pointtype 5 pointsize 5 palette notitle, "
+         << "'-' using 1:2:(sprintf('%.3g', $3)) with labels offset 0,-2 notitle\n";
+      for (int copy = 0; copy < 2; ++copy) {
+        for (const auto& [at, v] : cells) gp << format_number(at.first) << ' ' << format_number(at.second) << ' ' << format_number(v) << '\n';
+        gp << "e\n";
+      }
+      const std::string script = (maps / (name + ".gp")).string();
+      write_file_atomically(script, gp.str());
+      merge.heat_map_scripts.push_back(script);
+    }
+    md << "\nHeat maps over " << plan.parameters[axes[0]] << " and " << plan.parameters[axes[1]]
+       << " (the lowest value at each pair where the sweep has more parameters): `heatmaps/METRIC.png`.\n";
   }
   merge.summary_path = (fs::path(dir) / "summary.md").string();
   write_file_atomically(merge.summary_path, md.str());

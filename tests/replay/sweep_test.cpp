@@ -167,7 +167,28 @@ TEST_CASE("ffdsim sweep: a 3 x 3 grid planned, run and merged, a re-run skipping
   CHECK(rows == 9);
   std::ifstream summary(fs::path(out) / "summary.md");
   const std::string md((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
-  CHECK_THAT(md, Catch::Contains("| max_penetration_m |") && Catch::Contains("9 done, 0 failed, 0 missing"));
+  CHECK_THAT(md, Catch::Contains("| max_penetration_m |") && Catch::Contains("9 done, 0 failed, 0 missing") &&
+                    Catch::Contains("Heat maps over alpha and beta"));
+  CHECK(fs::file_size(fs::path(out) / "heatmaps" / "max_penetration_m.png") > 1000);
+  // Under the paper's response the blocks' nodes tremble at rest (docs/limits.md): never at rest.
+  CHECK(job.at("metrics").at("time_to_rest_s").is_null());
+  CHECK(job.at("metrics").at("force_ripple").is_null());  // the replay holds no probe
+  CHECK(job.at("run_s").get<double>() > 0.0);
+  CHECK(job.at("job_s").get<double>() >= job.at("run_s").get<double>());
+  r = test::run_ffdsim("sweep status " + out);
+  CHECK_THAT(r.output, Catch::Contains("time: the 9 jobs' replays ran"));
+
+  // A point opened as a scene: the same state after the same steps as its job.
+  r = test::run_ffdsim("run --sweep " + out + " --point 0004 --headless --seconds 0.05 -q");
+  INFO(r.output);
+  CHECK(r.exit_code == 0);
+  const fs::path point = fs::path(out) / "points" / "0004.toml";
+  REQUIRE(fs::exists(point));
+  CHECK_THAT(test::read_text(point), Catch::Contains("alpha = 0.6") && Catch::Contains("beta = 0.0"));
+  const std::string report = (dir / "point.json").string();
+  REQUIRE(test::run_ffdsim("simulate " + point.string() + " --steps 800 -q --report " + report).exit_code == 0);
+  CHECK(read_json(report).at("state_hash") == job.at("metrics").at("final_state_hash"));
+  CHECK(test::run_ffdsim("run --sweep " + out + " --point 0042 --headless --seconds 0.05 -q").exit_code == 2);
 
   // The same plan run again from nothing gives the same simulation results.
   const std::string again = (dir / "again").string();
@@ -176,6 +197,27 @@ TEST_CASE("ffdsim sweep: a 3 x 3 grid planned, run and merged, a re-run skipping
   const auto a = simulation_results(out), b = simulation_results(again);
   REQUIRE(a.size() == 9);
   for (const auto& [id, j] : a) CHECK(j.at("metrics") == b.at(id).at("metrics"));
+}
+
+TEST_CASE("ffdsim sweep: the time to rest is when the nodes' RMS speed stays below 5 mm/s, or none", "[sweep][cli]") {
+  const fs::path dir = test::fresh_temp_dir("sweep_rest");
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.toml") << "format = \"ffdsim-sweep\"\nversion = 1\nreplay = \"" << kSweeps << "drop.toml\"\n"
+                                << "[parameters]\nresponse = [\"paper\", \"solver\"]\n";
+  const std::string out = (dir / "sweep").string();
+  REQUIRE(test::run_ffdsim("sweep plan " + (dir / "s.toml").string() + " --out " + out + " -q").exit_code == 0);
+  REQUIRE(test::run_ffdsim("sweep run " + out + " -q").exit_code == 0);
+  const nlohmann::json paper = read_json(fs::path(out) / "results" / "0001.json");
+  const nlohmann::json solver = read_json(fs::path(out) / "results" / "0002.json");
+  CHECK(paper.at("parameters").at("response") == "paper");
+  CHECK(paper.at("metrics").at("time_to_rest_s").is_null());  // the paper's response trembles
+  REQUIRE(solver.at("metrics").at("time_to_rest_s").is_number());
+  const double rest = solver.at("metrics").at("time_to_rest_s").get<double>();
+  CHECK(rest > 0.05);  // the blocks fall first
+  CHECK(rest < 0.8);
+  REQUIRE(test::run_ffdsim("sweep merge " + out + " -q").exit_code == 0);
+  CHECK_THAT(test::read_text(fs::path(out) / "summary.md"), Catch::Contains("| time_to_rest_s |") && Catch::Contains("| 0002 | solver |"));
+  CHECK_FALSE(fs::exists(fs::path(out) / "heatmaps"));  // one parameter, and not a number
 }
 
 TEST_CASE("ffdsim sweep: a failing job is written as failed with its exit code, the others run, the exit code says so",

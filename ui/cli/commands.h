@@ -66,6 +66,7 @@ int run_replay_command(const ReplayOptions& options);
 
 struct RunOptions {
   std::string scene;  // empty = the default scene
+  std::string sweep_dir, sweep_point;  // --sweep DIR --point ID: that point's scene instead
   bool headless = false;
   bool window = false;       // insist on a window (error without a display)
   std::string frames_dir;    // headless viewer: write PNG frames here

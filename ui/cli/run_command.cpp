@@ -22,6 +22,7 @@
 #include "ffd/recording.h"
 #include "ffd/replay_runner.h"
 #include "ffd/scene_loader.h"
+#include "ffd/sweep.h"
 #include "json_report.h"
 
 namespace ffdsim {
@@ -311,11 +312,35 @@ void register_run(CLI::App& app, RunOptions& o) {
                   "Device: no sample for this long sets the force to zero and holds the probe (default: the scene's "
                   "[probe] watchdog_ms)")
       ->check(CLI::Range(0.1, 1e6));
+  CLI::Option* sweep = cmd->add_option("--sweep", o.sweep_dir, "A planned sweep's folder: open one of its points (--point)");
+  CLI::Option* point = cmd->add_option("--point", o.sweep_point, "The sweep's job id whose scene to open (jobs.tsv)");
+  sweep->needs(point);
+  point->needs(sweep);
   cmd->add_flag("--quiet,-q", o.quiet, "Print only errors");
 }
 
 int run_run(const RunOptions& given) {
   RunOptions o = given;
+  if (!o.sweep_dir.empty()) {
+    // The point's scene written beside the sweep's results, then run as any scene.
+    if (!o.scene.empty()) {
+      std::fprintf(stderr, "ffdsim: error: run takes a scene or --sweep DIR --point ID, not both\n");
+      return kExitUsage;
+    }
+    try {
+      const ffd::SweepPlan plan = ffd::read_sweep_plan(o.sweep_dir);
+      const ffd::SweepJob* job = ffd::find_sweep_job(plan, o.sweep_point);
+      if (!job) throw ffd::InputError(o.sweep_dir + "/plan.json: no job " + o.sweep_point);
+      const std::filesystem::path scene = std::filesystem::path(o.sweep_dir) / "points" / (job->id + ".toml");
+      std::filesystem::create_directories(scene.parent_path());
+      ffd::write_file_atomically(scene.string(), ffd::sweep_point_scene(plan, *job));
+      o.scene = scene.string();
+      if (!o.quiet) std::printf("sweep point %s: %s\n", job->id.c_str(), o.scene.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+      return kExitBadInput;
+    }
+  }
   // No display and no --headless: the headless demo, with its outputs where the README says.
   const bool demo = !o.headless && !o.window && !display_present();
   if (demo) {

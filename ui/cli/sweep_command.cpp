@@ -8,14 +8,18 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
 #include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "ffd/replay_runner.h"
@@ -78,11 +82,22 @@ bool run_one(const ffd::SweepPlan& plan, const std::string& dir, const ffd::Swee
   std::error_code error;
   fs::create_directories(fs::path(dir) / "logs", error);
   fs::remove(out, error);
+  const auto start = std::chrono::steady_clock::now();
   const int code = run_child({self_program(), "sweep", "exec", dir, job.id, "--out", out}, log);
   std::ifstream in(out, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   fs::remove(out, error);
-  const bool ran = (code == kExitOk || code == kExitAssertionFailed || code == kExitRuntime) && !text.empty();
+  bool ran = (code == kExitOk || code == kExitAssertionFailed || code == kExitRuntime) && !text.empty();
+  if (ran) {
+    // The job's whole time, from starting its process to having its result: beside the
+    // replay's own run_s, what running it as a job costs (ffdsim sweep status).
+    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    ran = j.is_object();
+    if (ran) {
+      j["job_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      text = j.dump(1) + "\n";
+    }
+  }
   if (!ran) {
     std::string why = code < 0 ? "could not start " + self_program()
                       : code > 128 ? "ended by signal " + std::to_string(code - 128) + " (" + strsignal(code - 128) + ")"
@@ -128,6 +143,7 @@ int exec_command(const std::string& dir, const std::string& id, const std::strin
   ffd::SweepPlan plan;
   const ffd::SweepJob* job = nullptr;
   ffd::LoadedReplay replay;
+  const auto start = std::chrono::steady_clock::now();
   try {
     plan = ffd::read_sweep_plan(dir);
     job = ffd::find_sweep_job(plan, id);
@@ -143,9 +159,13 @@ int exec_command(const std::string& dir, const std::string& id, const std::strin
   // A sweep's jobs share machines: their step times are metrics, not checks.
   run.check_latency = false;
   run.threads = plan.threads;
+  const auto loaded = std::chrono::steady_clock::now();
   const ffd::ReplayResult result = ffd::run_replay(replay, run);
+  const auto ran = std::chrono::steady_clock::now();
   std::fputs(ffd::format_replay_result(replay.script, result).c_str(), stdout);
-  ffd::write_file_atomically(out, ffd::sweep_job_result_json(plan, *job, replay, result));
+  const auto seconds = [](auto from, auto to) { return std::chrono::duration<double>(to - from).count(); };
+  ffd::write_file_atomically(
+      out, ffd::sweep_job_result_json(plan, *job, replay, result, seconds(start, loaded), seconds(loaded, ran)));
   if (!result.finite) return kExitRuntime;
   return result.passed() ? kExitOk : kExitAssertionFailed;
 }
@@ -250,6 +270,11 @@ int status_command(const std::string& dir) {
   }
   std::printf("%s: %zu jobs: %zu done, %zu failed, %zu missing\n", dir.c_str(), plan.jobs.size(), count[0], count[1],
               count[2]);
+  const ffd::SweepTimes times = ffd::sweep_times(plan, dir);
+  if (times.jobs > 0 && times.run_s > 0.0)
+    std::printf("time: the %zu jobs' replays ran %.1f s; running them as jobs added %.1f s (%.1f %%: processes, "
+                "loading, results)\n",
+                times.jobs, times.run_s, times.overhead_s, 100.0 * times.overhead_s / times.run_s);
   if (!failed.empty()) std::printf("failed:%s\n", failed.c_str());
   if (!missing.empty()) std::printf("missing:%s\n", missing.c_str());
   return count[0] == plan.jobs.size() ? kExitOk : kExitAssertionFailed;
@@ -258,6 +283,11 @@ int status_command(const std::string& dir) {
 int merge_command(const std::string& dir, bool quiet) {
   try {
     const ffd::SweepMerge merge = ffd::merge_sweep(dir);
+    for (const std::string& script : merge.heat_map_scripts) {
+      const std::string command = "gnuplot '" + script + "' 2>&1";
+      if (std::system(command.c_str()) != 0)
+        throw std::runtime_error("gnuplot failed on " + script + " (is gnuplot installed? setup.sh installs it)");
+    }
     if (!quiet)
       std::printf("%s: %zu done, %zu failed, %zu missing; wrote %s and %s\n", dir.c_str(), merge.done, merge.failed,
                   merge.missing, merge.csv_path.c_str(), merge.summary_path.c_str());

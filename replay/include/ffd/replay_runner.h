@@ -55,6 +55,12 @@ struct ReplayResult {
   std::uint64_t longest_inversion_steps = 0, longest_inversion_step = 0;
   Index longest_inversion_cell = 0;
   std::uint64_t most_inverted_cells = 0, most_inverted_step = 0;
+  // When the scene came to rest: from this time on (s) the lattice nodes' RMS speed stayed
+  // below kRestRmsSpeed to the end; none if it was still moving at the end.
+  std::optional<double> time_to_rest_s;
+  // The probe force's ripple while held: over the script's [[assert.force_window]] spans, the
+  // largest standard deviation of |F| as a share of its mean; none without such a window.
+  std::optional<double> force_ripple;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> hashes;  // (step, state hash) the run produced
   std::optional<std::uint64_t> first_divergence;  // first hash check that differed
   std::uint64_t final_hash = 0;
@@ -62,6 +68,8 @@ struct ReplayResult {
   std::vector<AssertionResult> assertions;
   bool passed() const;
 };
+
+inline constexpr double kRestRmsSpeed = 0.005;  // m/s: ReplayResult::time_to_rest_s
 
 struct ReplayRunOptions {
   Pacing pacing = Pacing::Fast;

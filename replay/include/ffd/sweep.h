@@ -49,6 +49,13 @@ std::vector<std::string> sweep_parameter_names();
 // that changes the physics changes the state). Throws InputError naming the parameter.
 LoadedReplay load_sweep_job(const SweepPlan& plan, const SweepJob& job);
 
+// The scene of job `job` as a scene file's text: the replay's scene with the job's values and
+// the replay's own step-0 settings (α, β, accuracy, response, stiffness, probe stiffness)
+// written in, and its mesh and font paths absolute, so that `ffdsim run` opens the point the
+// sweep found. Throws InputError where that cannot be written (an object of a [[group]] named
+// alone).
+std::string sweep_point_scene(const SweepPlan& plan, const SweepJob& job);
+
 // The plan's folder: plan.json, jobs.tsv, sweep.sbatch, parallel.sh, results/ and logs/;
 // the scripts run `program` (this ffdsim, by its absolute path). Throws std::runtime_error
 // naming the file it could not write.
@@ -64,8 +71,9 @@ std::string sweep_result_path(const std::string& dir, const std::string& id);
 // every assertion with its measured value, the ffdsim version and the scene's content hash.
 inline constexpr int kSweepExitDiverged = 3, kSweepExitAssertionFailed = 4;  // as `ffdsim replay`'s
 struct ReplayResult;
+// `load_s` and `run_s`: the wall seconds the job took to load its replay and scene, and to run it.
 std::string sweep_job_result_json(const SweepPlan& plan, const SweepJob& job, const LoadedReplay& replay,
-                                  const ReplayResult& result);
+                                  const ReplayResult& result, double load_s, double run_s);
 // A job that could not run or did not end (a bad point, a crash): its exit code and why.
 std::string sweep_job_failure_json(const SweepPlan& plan, const SweepJob& job, int exit_code, const std::string& why);
 
@@ -79,12 +87,23 @@ const char* job_state_name(JobState state);
 // result, or one left by another plan's job of the same id).
 JobState sweep_job_state(const SweepPlan& plan, const std::string& dir, const SweepJob& job);
 
+// What the jobs done so far cost: their replays' own run time, and what running them as jobs
+// added (a process started, the replay and scene loaded, the result written), in seconds.
+struct SweepTimes {
+  std::size_t jobs = 0;  // with both figures in their result
+  double run_s = 0.0, overhead_s = 0.0;
+};
+SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir);
+
 struct SweepMerge {
   std::size_t done = 0, failed = 0, missing = 0;
   std::string csv_path, summary_path;
+  // gnuplot scripts, one per ranked metric, each drawing DIR/heatmaps/METRIC.png over the
+  // sweep's first two numeric parameters (none if it has fewer than two)
+  std::vector<std::string> heat_map_scripts;
 };
-// DIR/results.csv (a row per job: its parameters, state, metrics) and DIR/summary.md (the
-// best point per metric).
+// DIR/results.csv (a row per job: its parameters, state, metrics), DIR/summary.md (the best
+// point per metric) and the heat maps' gnuplot scripts (the caller runs gnuplot on them).
 SweepMerge merge_sweep(const std::string& dir);
 
 }  // namespace ffd
