@@ -720,11 +720,12 @@ SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir) {
   for (const SweepJob& job : plan.jobs) {
     if (sweep_job_state(plan, dir, job) == JobState::Missing) continue;
     const std::optional<nlohmann::json> r = read_result(sweep_result_path(dir, job.id));
-    if (!r || !r->contains("run_s") || !r->contains("job_s")) continue;
-    const double run = r->at("run_s").get<double>(), whole = r->at("job_s").get<double>();
+    if (!r || !r->contains("load_s") || !r->contains("run_s") || !r->contains("job_s")) continue;
+    const double load = r->at("load_s").get<double>(), run = r->at("run_s").get<double>();
     ++times.jobs;
+    times.load_s += load;
     times.run_s += run;
-    times.overhead_s += std::max(0.0, whole - run);
+    times.overhead_s += std::max(0.0, r->at("job_s").get<double>() - load - run);
   }
   return times;
 }

@@ -174,9 +174,21 @@ TEST_CASE("ffdsim sweep: a 3 x 3 grid planned, run and merged, a re-run skipping
   CHECK(job.at("metrics").at("time_to_rest_s").is_null());
   CHECK(job.at("metrics").at("force_ripple").is_null());  // the replay holds no probe
   CHECK(job.at("run_s").get<double>() > 0.0);
-  CHECK(job.at("job_s").get<double>() >= job.at("run_s").get<double>());
+  CHECK(job.at("job_s").get<double>() >= job.at("load_s").get<double>() + job.at("run_s").get<double>());
   r = test::run_ffdsim("sweep status " + out);
-  CHECK_THAT(r.output, Catch::Contains("time: the 9 jobs' replays ran"));
+  CHECK_THAT(r.output, Catch::Contains("time: the 9 jobs took") && Catch::Contains("as a sweep's jobs they took"));
+
+  // The results page: the summary under the stamp, the heat maps beside it, the jobs' time.
+  const fs::path page = dir / "results" / "sweep_drop.md";
+  fs::create_directories(page.parent_path());
+  r = test::run_ffdsim("sweep merge " + out + " -q --update-docs " + page.string());
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const std::string text = test::read_text(page);
+  CHECK_THAT(text, Catch::Contains("# Sweep: alpha and beta over two dropped blocks") && Catch::Contains("- Command: `") &&
+                       Catch::Contains("- Machine: ") && Catch::Contains("](sweep_drop_max_penetration_m.png)") &&
+                       Catch::Contains("Time: the 9 jobs took"));
+  CHECK(fs::exists(dir / "results" / "sweep_drop_max_penetration_m.png"));
 
   // A point opened as a scene: the same state after the same steps as its job.
   r = test::run_ffdsim("run --sweep " + out + " --point 0004 --headless --seconds 0.05 -q");

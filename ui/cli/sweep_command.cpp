@@ -22,6 +22,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "output_files.h"
+#include "bench/paper_table.h"
 #include "ffd/replay_runner.h"
 #include "ffd/sweep.h"
 
@@ -271,23 +273,54 @@ int status_command(const std::string& dir) {
   std::printf("%s: %zu jobs: %zu done, %zu failed, %zu missing\n", dir.c_str(), plan.jobs.size(), count[0], count[1],
               count[2]);
   const ffd::SweepTimes times = ffd::sweep_times(plan, dir);
-  if (times.jobs > 0 && times.run_s > 0.0)
-    std::printf("time: the %zu jobs' replays ran %.1f s; running them as jobs added %.1f s (%.1f %%: processes, "
-                "loading, results)\n",
-                times.jobs, times.run_s, times.overhead_s, 100.0 * times.overhead_s / times.run_s);
+  const double own = times.load_s + times.run_s;
+  if (times.jobs > 0 && own > 0.0)
+    std::printf("time: the %zu jobs took %.2f s of their own (loading %.2f s, running %.2f s); as a sweep's jobs they "
+                "took %.2f s more (%.2f %%: processes, the plan, the results)\n",
+                times.jobs, own, times.load_s, times.run_s, times.overhead_s, 100.0 * times.overhead_s / own);
   if (!failed.empty()) std::printf("failed:%s\n", failed.c_str());
   if (!missing.empty()) std::printf("missing:%s\n", missing.c_str());
   return count[0] == plan.jobs.size() ? kExitOk : kExitAssertionFailed;
 }
 
-int merge_command(const std::string& dir, bool quiet) {
+// The results page of `merge --update-docs FILE`: the summary under the stamp, the heat maps
+// copied into FILE's folder beside it (FILE's name without .md, then _METRIC.png), and the
+// time the jobs took.
+void write_sweep_page(const std::string& dir, const std::string& page, const ffd::SweepMerge& merge) {
+  const ffd::SweepPlan plan = ffd::read_sweep_plan(dir);
+  std::string summary = read_file(merge.summary_path);
+  const std::string title = summary.substr(2, summary.find('\n') - 2);
+  std::string body = summary.substr(summary.find('\n') + 1);
+  const fs::path out(page);
+  for (const std::string& script : merge.heat_map_scripts) {
+    const fs::path png = fs::path(script).replace_extension(".png");
+    const std::string name = out.stem().string() + "_" + png.filename().string();
+    fs::copy_file(png, out.parent_path() / name, fs::copy_options::overwrite_existing);
+    body += "\n![" + png.stem().string() + "](" + name + ")\n";
+  }
+  const ffd::SweepTimes times = ffd::sweep_times(plan, dir);
+  const double own = times.load_s + times.run_s;
+  if (times.jobs > 0 && own > 0.0) {
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "\nTime: the %zu jobs took %.1f s of their own (loading %.1f s, running %.1f s); as the sweep's jobs "
+                  "they took %.2f s more (%.2f %%).\n",
+                  times.jobs, own, times.load_s, times.run_s, times.overhead_s, 100.0 * times.overhead_s / own);
+    body += line;
+  }
+  write_results_page(page, title, ffdbench::cpu_description(), body);
+}
+
+int merge_command(const std::string& dir, const std::string& page, bool quiet) {
   try {
+    if (!page.empty()) check_results_page(page);
     const ffd::SweepMerge merge = ffd::merge_sweep(dir);
     for (const std::string& script : merge.heat_map_scripts) {
       const std::string command = "gnuplot '" + script + "' 2>&1";
       if (std::system(command.c_str()) != 0)
         throw std::runtime_error("gnuplot failed on " + script + " (is gnuplot installed? setup.sh installs it)");
     }
+    if (!page.empty()) write_sweep_page(dir, page, merge);
     if (!quiet)
       std::printf("%s: %zu done, %zu failed, %zu missing; wrote %s and %s\n", dir.c_str(), merge.done, merge.failed,
                   merge.missing, merge.csv_path.c_str(), merge.summary_path.c_str());
@@ -317,6 +350,9 @@ void register_sweep(CLI::App& app, SweepOptions& o) {
   run->add_flag("--retry-failed", o.retry_failed, "Run the failed jobs again too");
   CLI::App* merge = sweep->add_subcommand("merge", "Merge the results into DIR/results.csv and DIR/summary.md");
   merge->add_option("dir", o.dir, "The sweep's folder")->required();
+  merge->add_option("--update-docs", o.results_page,
+                    "Also write the summary, the heat maps and the jobs' time as a results page stamped with this "
+                    "command, the commit, the machine and the date (docs/results/sweep_*.md)");
   CLI::App* status = sweep->add_subcommand("status", "Say which jobs are done, failed or missing");
   status->add_option("dir", o.dir, "The sweep's folder")->required();
   CLI::App* exec = sweep->add_subcommand("exec", "The child run-one starts");
@@ -334,7 +370,7 @@ int run_sweep_command(const CLI::App& app, const SweepOptions& o) {
   if (sweep->got_subcommand("run-one")) return run_one_command(o.dir, o.id, o.force);
   if (sweep->got_subcommand("run")) return run_command(o.dir, o.jobs, o.retry_failed, o.quiet);
   if (sweep->got_subcommand("status")) return status_command(o.dir);
-  if (sweep->got_subcommand("merge")) return merge_command(o.dir, o.quiet);
+  if (sweep->got_subcommand("merge")) return merge_command(o.dir, o.results_page, o.quiet);
   return kExitUsage;
 }
 

@@ -87,11 +87,12 @@ const char* job_state_name(JobState state);
 // result, or one left by another plan's job of the same id).
 JobState sweep_job_state(const SweepPlan& plan, const std::string& dir, const SweepJob& job);
 
-// What the jobs done so far cost: their replays' own run time, and what running them as jobs
-// added (a process started, the replay and scene loaded, the result written), in seconds.
+// What the jobs done so far cost, in seconds: their own time, what `ffdsim replay` of each
+// point takes (loading its replay and scene, running it), and what running them as a sweep's
+// jobs added (processes started, the plan read, the result written).
 struct SweepTimes {
-  std::size_t jobs = 0;  // with both figures in their result
-  double run_s = 0.0, overhead_s = 0.0;
+  std::size_t jobs = 0;  // with every figure in their result
+  double load_s = 0.0, run_s = 0.0, overhead_s = 0.0;
 };
 SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir);
 
