@@ -545,6 +545,7 @@ void write_sweep_plan(const SweepPlan& plan, const std::string& dir, const std::
   j["replay"] = plan.replay;
   j["description"] = plan.description;
   j["threads"] = plan.threads;
+  j["plan_s"] = plan.plan_s;
   j["parameters"] = plan.parameters;
   j["jobs"] = nlohmann::json::array();
   for (const SweepJob& job : plan.jobs) {
@@ -599,6 +600,7 @@ SweepPlan read_sweep_plan(const std::string& dir) {
     plan.replay = j.at("replay").get<std::string>();
     plan.description = j.value("description", "");
     plan.threads = j.value("threads", 1);
+    plan.plan_s = j.value("plan_s", 0.0);
     plan.parameters = j.at("parameters").get<std::vector<std::string>>();
     for (const nlohmann::json& job : j.at("jobs")) {
       SweepJob out;
@@ -697,7 +699,7 @@ std::string sweep_job_result_json(const SweepPlan& plan, const SweepJob& job, co
                   {"mean_contacts", result.mean_contacts},
                   {"peak_force_n", result.peak_force_n},
                   {"max_speed_m_s", result.max_speed_m_s},
-                  {"energy_rise_j", result.max_energy_j - result.initial_energy_j},
+                  {"energy_gain_j", result.max_energy_gain_j},
                   {"step_p50_us", result.latency.compute.p50_us},
                   {"step_p99_us", result.latency.compute.p99_us},
                   {"final_state_hash", std::string(hash)}};
@@ -773,8 +775,9 @@ SweepMerge merge_sweep(const std::string& dir) {
 
   // The best point per numeric metric, among the jobs done (all assertions held).
   std::ostringstream md;
+  const auto shown = [](const std::string& path) { return fs::proximate(path).string(); };  // relative where it can be
   md << "# Sweep: " << (plan.description.empty() ? fs::path(plan.sweep_file).filename().string() : plan.description)
-     << "\n\n- Sweep file: `" << plan.sweep_file << "`\n- Replay: `" << plan.replay << "`\n- Jobs: " << plan.jobs.size()
+     << "\n\n- Sweep file: `" << shown(plan.sweep_file) << "`\n- Replay: `" << shown(plan.replay) << "`\n- Jobs: " << plan.jobs.size()
      << " (" << merge.done << " done, " << merge.failed << " failed, " << merge.missing << " missing)\n\n"
      << "The best point per metric among the jobs done (every assertion held): the lowest value.\n\n"
      << "| metric | best | job |";
@@ -785,7 +788,7 @@ SweepMerge merge_sweep(const std::string& dir) {
   // The metrics where lower is better (the others, such as the contacts per step, describe a
   // point without ranking it: they are in results.csv).
   const std::vector<std::string> ranked = {"time_to_rest_s", "force_ripple", "max_penetration_m", "max_speed_m_s",
-                                           "energy_rise_j", "step_p99_us"};
+                                           "step_p99_us"};
   for (const std::string& name : ranked) {
     std::optional<std::size_t> best;
     double best_value = 0.0;
@@ -845,7 +848,7 @@ SweepMerge merge_sweep(const std::string& dir) {
       merge.heat_map_scripts.push_back(script);
     }
     md << "\nHeat maps over " << plan.parameters[axes[0]] << " and " << plan.parameters[axes[1]]
-       << " (the lowest value at each pair where the sweep has more parameters): `heatmaps/METRIC.png`.\n";
+       << " (the lowest value at each pair where the sweep has more parameters): heatmaps/METRIC.png in the sweep's folder.\n";
   }
   merge.summary_path = (fs::path(dir) / "summary.md").string();
   write_file_atomically(merge.summary_path, md.str());

@@ -112,6 +112,7 @@ bool run_one(const ffd::SweepPlan& plan, const std::string& dir, const ffd::Swee
 }
 
 int plan_command(const std::string& sweep_file, const std::string& dir, bool quiet) {
+  const auto start = std::chrono::steady_clock::now();
   ffd::SweepPlan plan;
   try {
     plan = ffd::load_sweep_file(sweep_file);
@@ -122,6 +123,7 @@ int plan_command(const std::string& sweep_file, const std::string& dir, bool qui
     return kExitBadInput;
   }
   try {
+    plan.plan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ffd::write_sweep_plan(plan, dir, self_program());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
@@ -286,7 +288,8 @@ int status_command(const std::string& dir) {
 // The results page of `merge --update-docs FILE`: the summary under the stamp, the heat maps
 // copied into FILE's folder beside it (FILE's name without .md, then _METRIC.png), and the
 // time the jobs took.
-void write_sweep_page(const std::string& dir, const std::string& page, const ffd::SweepMerge& merge) {
+void write_sweep_page(const std::string& dir, const std::string& page, const ffd::SweepMerge& merge,
+                      std::chrono::steady_clock::time_point merge_start) {
   const ffd::SweepPlan plan = ffd::read_sweep_plan(dir);
   std::string summary = read_file(merge.summary_path);
   const std::string title = summary.substr(2, summary.find('\n') - 2);
@@ -301,17 +304,24 @@ void write_sweep_page(const std::string& dir, const std::string& page, const ffd
   const ffd::SweepTimes times = ffd::sweep_times(plan, dir);
   const double own = times.load_s + times.run_s;
   if (times.jobs > 0 && own > 0.0) {
-    char line[256];
+    // What the sweep adds to its jobs' own time: the plan, each job's processes, plan reading
+    // and result, and this merge (its heat maps included).
+    const double merge_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - merge_start).count();
+    const double added = plan.plan_s + times.overhead_s + merge_s;
+    char line[512];
     std::snprintf(line, sizeof line,
-                  "\nTime: the %zu jobs took %.1f s of their own (loading %.1f s, running %.1f s); as the sweep's jobs "
-                  "they took %.2f s more (%.2f %%).\n",
-                  times.jobs, own, times.load_s, times.run_s, times.overhead_s, 100.0 * times.overhead_s / own);
+                  "\nTime: the %zu jobs took %.1f s of their own, as `ffdsim replay` of each point would (loading "
+                  "%.1f s, running %.1f s). The sweep added %.2f s (%.2f %%): the plan %.2f s, the jobs' processes and "
+                  "results %.2f s, the merge %.2f s.\n",
+                  times.jobs, own, times.load_s, times.run_s, added, 100.0 * added / own, plan.plan_s, times.overhead_s,
+                  merge_s);
     body += line;
   }
   write_results_page(page, title, ffdbench::cpu_description(), body);
 }
 
 int merge_command(const std::string& dir, const std::string& page, bool quiet) {
+  const auto start = std::chrono::steady_clock::now();
   try {
     if (!page.empty()) check_results_page(page);
     const ffd::SweepMerge merge = ffd::merge_sweep(dir);
@@ -320,7 +330,7 @@ int merge_command(const std::string& dir, const std::string& page, bool quiet) {
       if (std::system(command.c_str()) != 0)
         throw std::runtime_error("gnuplot failed on " + script + " (is gnuplot installed? setup.sh installs it)");
     }
-    if (!page.empty()) write_sweep_page(dir, page, merge);
+    if (!page.empty()) write_sweep_page(dir, page, merge, start);
     if (!quiet)
       std::printf("%s: %zu done, %zu failed, %zu missing; wrote %s and %s\n", dir.c_str(), merge.done, merge.failed,
                   merge.missing, merge.csv_path.c_str(), merge.summary_path.c_str());

@@ -35,6 +35,7 @@ struct SweepPlan {
   int threads = 1;                  // threads a job's step is spread over
   std::vector<std::string> parameters;  // names, in the file's order
   std::vector<SweepJob> jobs;
+  double plan_s = 0.0;              // wall seconds `sweep plan` took (read, checked, written)
 };
 
 // Reads a sweep file. Throws InputError "file:line:col: field: problem" for anything wrong:
