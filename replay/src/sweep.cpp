@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -253,10 +254,15 @@ class SweepReader {
         const std::int64_t count = r.integer("count", 0, 1, static_cast<std::int64_t>(kMaxSweepJobs));
         if (count == 1 && from != to) r.fail_at("count", "must be at least 2 for a range from " + format_number(from) +
                                                             " to " + format_number(to));
-        for (std::int64_t i = 0; i < count; ++i)
-          values.push_back(count == 1 ? from
+        for (std::int64_t i = 0; i < count; ++i) {
+          const double v = count == 1 ? from
                                       : (from * static_cast<double>(count - 1 - i) + to * static_cast<double>(i)) /
-                                            static_cast<double>(count - 1));  // the ends exact
+                                            static_cast<double>(count - 1);  // the ends exact
+          // To 12 significant digits: 0.3 as a user would type it, not 0.30000000000000004.
+          char text[32];
+          std::snprintf(text, sizeof text, "%.12g", v);
+          values.push_back(std::strtod(text, nullptr));
+        }
       } else {
         reader.fail(node.source(), field, "expected a list of values or a range {from, to, count} (got " + describe_type(node) + ")");
       }

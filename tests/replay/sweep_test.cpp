@@ -61,6 +61,11 @@ TEST_CASE("Sweep files: a grid is every combination, the last parameter fastest,
   CHECK(ffd::sweep_value_text(plan.jobs[3].values[0]) == "0.6");
   CHECK(ffd::sweep_value_text(plan.jobs[8].values[0]) == "1");
   CHECK(fs::path(plan.replay).is_absolute());
+  // A range's values as a user would type them.
+  const ffd::SweepPlan ten = ffd::parse_sweep(kHead + "[parameters]\nalpha = { from = 0.1, to = 1.0, count = 10 }\n", "s.toml", kSweeps);
+  REQUIRE(ten.jobs.size() == 10);
+  CHECK(ffd::sweep_value_text(ten.jobs[2].values[0]) == "0.3");
+  CHECK(ffd::sweep_value_text(ten.jobs[8].values[0]) == "0.9");
   // Order as written, not as sorted.
   const ffd::SweepPlan reversed = ffd::parse_sweep(kHead + "[parameters]\nbeta = [0.1]\nalpha = [0.3, 0.4]\n", "s.toml", kSweeps);
   CHECK(reversed.parameters == std::vector<std::string>{"beta", "alpha"});
