@@ -340,3 +340,32 @@ TEST_CASE("ffdsim sweep: a Slurm job array runs a plan's jobs to the same result
     logs += entry.path().filename().string().rfind("slurm-", 0) == 0 ? 1 : 0;
   CHECK(logs == 9);
 }
+
+TEST_CASE("ffdsim sweep: a sweep killed half-way resumes and ends with every job done once", "[sweep][cli]") {
+  const fs::path dir = test::fresh_temp_dir("sweep_killed");
+  const std::string out = (dir / "sweep").string();
+  REQUIRE(test::run_ffdsim("sweep plan " + kSweeps + "drop_alpha_beta.toml --out " + out + " -q").exit_code == 0);
+  // One job at a time, killed (SIGKILL: no clean-up) once a few results are there.
+  const test::ProgramResult killed = test::run_shell(
+      std::string(FFDSIM_BINARY) + " sweep run " + out + " --jobs 1 -q & pid=$!; "
+      "for i in $(seq 6000); do n=$(ls " + out + "/results/*.json 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.01; done; "
+      "kill -9 $pid; wait $pid; echo killed");
+  INFO(killed.output);
+  REQUIRE_THAT(killed.output, Catch::Contains("killed"));
+  std::map<std::string, fs::file_time_type> before;
+  for (const auto& entry : fs::directory_iterator(fs::path(out) / "results"))
+    if (entry.path().extension() == ".json") before[entry.path().stem().string()] = fs::last_write_time(entry.path());
+  CHECK(before.size() >= 3);
+  CHECK(before.size() < 9);
+  test::ProgramResult r = test::run_ffdsim("sweep status " + out);
+  CHECK(r.exit_code == 4);
+  CHECK_THAT(r.output, Catch::Contains("missing"));
+  r = test::run_ffdsim("sweep run " + out + " -q");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(test::run_ffdsim("sweep status " + out).exit_code == 0);
+  for (const auto& [id, time] : before) CHECK(fs::last_write_time(fs::path(out) / "results" / (id + ".json")) == time);
+  // No job's temporary file is left as a result.
+  for (const auto& entry : fs::directory_iterator(fs::path(out) / "results"))
+    CHECK((entry.path().extension() == ".json" || entry.path().extension() == ".part"));
+}
