@@ -738,8 +738,23 @@ SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir) {
   return times;
 }
 
-SweepMerge merge_sweep(const std::string& dir) {
+SweepMerge merge_sweep(const std::string& dir, const std::vector<std::string>& axis_names) {
   const SweepPlan plan = read_sweep_plan(dir);
+  const auto numeric = [&](std::size_t i) {
+    return !plan.jobs.empty() && (std::holds_alternative<double>(plan.jobs[0].values[i]) ||
+                                  std::holds_alternative<std::int64_t>(plan.jobs[0].values[i]));
+  };
+  std::vector<std::size_t> axes;
+  for (const std::string& name : axis_names) {
+    const auto it = std::find(plan.parameters.begin(), plan.parameters.end(), name);
+    if (it == plan.parameters.end() || !numeric(static_cast<std::size_t>(it - plan.parameters.begin())))
+      throw InputError(dir + "/plan.json: --axes " + name + ": not a numeric parameter of the sweep (" +
+                       join(std::vector<std::string_view>(plan.parameters.begin(), plan.parameters.end())) + ")");
+    axes.push_back(static_cast<std::size_t>(it - plan.parameters.begin()));
+  }
+  if (axis_names.empty())
+    for (std::size_t i = 0; i < plan.parameters.size() && axes.size() < 2; ++i)
+      if (numeric(i)) axes.push_back(i);
   SweepMerge merge;
   // The metrics, in the order the first result lists them.
   std::vector<std::string> metrics;
@@ -813,13 +828,8 @@ SweepMerge merge_sweep(const std::string& dir) {
     for (const SweepValue& v : plan.jobs[*best].values) md << ' ' << sweep_value_text(v) << " |";
     md << '\n';
   }
-  // Heat maps: each ranked metric over the first two numeric parameters; where the sweep has
-  // more, a cell shows the lowest value among the jobs done at its two values.
-  std::vector<std::size_t> axes;
-  for (std::size_t i = 0; i < plan.parameters.size() && axes.size() < 2; ++i)
-    if (!plan.jobs.empty() && (std::holds_alternative<double>(plan.jobs[0].values[i]) ||
-                               std::holds_alternative<std::int64_t>(plan.jobs[0].values[i])))
-      axes.push_back(i);
+  // Heat maps: each ranked metric over the two axes; where the sweep has more parameters, a
+  // cell shows the lowest value among the jobs done at its two values.
   if (axes.size() == 2) {
     const fs::path maps = fs::path(dir) / "heatmaps";
     fs::create_directories(maps);

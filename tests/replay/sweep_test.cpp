@@ -183,6 +183,14 @@ TEST_CASE("ffdsim sweep: a 3 x 3 grid planned, run and merged, a re-run skipping
   r = test::run_ffdsim("sweep status " + out);
   CHECK_THAT(r.output, Catch::Contains("time: the 9 jobs took") && Catch::Contains("as a sweep's jobs they took"));
 
+  // Heat maps over other axes; a name that is no numeric parameter is refused.
+  r = test::run_ffdsim("sweep merge " + out + " -q --axes beta,alpha");
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(test::read_text(fs::path(out) / "summary.md"), Catch::Contains("Heat maps over beta and alpha"));
+  r = test::run_ffdsim("sweep merge " + out + " -q --axes beta,gamma");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains("--axes gamma: not a numeric parameter of the sweep (alpha, beta)"));
+
   // The results page: the summary under the stamp, the heat maps beside it, the jobs' time.
   const fs::path page = dir / "results" / "sweep_drop.md";
   fs::create_directories(page.parent_path());

@@ -141,6 +141,7 @@ int run_piles_command(const PilesOptions& options);
 struct SweepOptions {
   std::string sweep_file, dir, id, out;
   std::string results_page;  // merge --update-docs
+  std::vector<std::string> axes;  // merge --axes A,B
   int jobs = 2;
   bool force = false, retry_failed = false, quiet = false;
 };

@@ -320,11 +320,11 @@ void write_sweep_page(const std::string& dir, const std::string& page, const ffd
   write_results_page(page, title, ffdbench::cpu_description(), body);
 }
 
-int merge_command(const std::string& dir, const std::string& page, bool quiet) {
+int merge_command(const std::string& dir, const std::vector<std::string>& axes, const std::string& page, bool quiet) {
   const auto start = std::chrono::steady_clock::now();
   try {
     if (!page.empty()) check_results_page(page);
-    const ffd::SweepMerge merge = ffd::merge_sweep(dir);
+    const ffd::SweepMerge merge = ffd::merge_sweep(dir, axes);
     for (const std::string& script : merge.heat_map_scripts) {
       const std::string command = "gnuplot '" + script + "' 2>&1";
       if (std::system(command.c_str()) != 0)
@@ -360,6 +360,9 @@ void register_sweep(CLI::App& app, SweepOptions& o) {
   run->add_flag("--retry-failed", o.retry_failed, "Run the failed jobs again too");
   CLI::App* merge = sweep->add_subcommand("merge", "Merge the results into DIR/results.csv and DIR/summary.md");
   merge->add_option("dir", o.dir, "The sweep's folder")->required();
+  merge->add_option("--axes", o.axes, "The two numeric parameters the heat maps are drawn over (default: the first two)")
+      ->expected(2)
+      ->delimiter(',');
   merge->add_option("--update-docs", o.results_page,
                     "Also write the summary, the heat maps and the jobs' time as a results page stamped with this "
                     "command, the commit, the machine and the date (docs/results/sweep_*.md)");
@@ -380,7 +383,7 @@ int run_sweep_command(const CLI::App& app, const SweepOptions& o) {
   if (sweep->got_subcommand("run-one")) return run_one_command(o.dir, o.id, o.force);
   if (sweep->got_subcommand("run")) return run_command(o.dir, o.jobs, o.retry_failed, o.quiet);
   if (sweep->got_subcommand("status")) return status_command(o.dir);
-  if (sweep->got_subcommand("merge")) return merge_command(o.dir, o.results_page, o.quiet);
+  if (sweep->got_subcommand("merge")) return merge_command(o.dir, o.axes, o.results_page, o.quiet);
   return kExitUsage;
 }
 

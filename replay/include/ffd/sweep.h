@@ -106,6 +106,8 @@ struct SweepMerge {
 };
 // DIR/results.csv (a row per job: its parameters, state, metrics), DIR/summary.md (the best
 // point per metric) and the heat maps' gnuplot scripts (the caller runs gnuplot on them).
-SweepMerge merge_sweep(const std::string& dir);
+// `axes`: the two parameters the heat maps are drawn over (empty: the first two numeric ones);
+// a name that is not a numeric parameter of the plan is an InputError.
+SweepMerge merge_sweep(const std::string& dir, const std::vector<std::string>& axes = {});
 
 }  // namespace ffd
