@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -111,6 +112,16 @@ bool run_one(const ffd::SweepPlan& plan, const std::string& dir, const ffd::Swee
   return ran && code == kExitOk;
 }
 
+// DIR/plan.json, or none with the reason said.
+std::optional<ffd::SweepPlan> read_plan(const std::string& dir) {
+  try {
+    return ffd::read_sweep_plan(dir);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
+    return std::nullopt;
+  }
+}
+
 int plan_command(const std::string& sweep_file, const std::string& dir, bool quiet) {
   const auto start = std::chrono::steady_clock::now();
   ffd::SweepPlan plan;
@@ -175,13 +186,9 @@ int exec_command(const std::string& dir, const std::string& id, const std::strin
 }
 
 int run_one_command(const std::string& dir, const std::string& id, bool force) {
-  ffd::SweepPlan plan;
-  try {
-    plan = ffd::read_sweep_plan(dir);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-    return kExitBadInput;
-  }
+  const std::optional<ffd::SweepPlan> read = read_plan(dir);
+  if (!read) return kExitBadInput;
+  const ffd::SweepPlan& plan = *read;
   const ffd::SweepJob* job = ffd::find_sweep_job(plan, id);
   if (!job) {
     std::fprintf(stderr, "ffdsim: error: %s/plan.json: no job %s (jobs %s to %s)\n", dir.c_str(), id.c_str(),
@@ -199,13 +206,9 @@ int run_one_command(const std::string& dir, const std::string& id, bool force) {
 }
 
 int run_command(const std::string& dir, int jobs, bool retry_failed, bool quiet) {
-  ffd::SweepPlan plan;
-  try {
-    plan = ffd::read_sweep_plan(dir);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-    return kExitBadInput;
-  }
+  const std::optional<ffd::SweepPlan> read = read_plan(dir);
+  if (!read) return kExitBadInput;
+  const ffd::SweepPlan& plan = *read;
   std::vector<const ffd::SweepJob*> todo;
   std::size_t failed_before = 0;
   for (const ffd::SweepJob& job : plan.jobs) {
@@ -257,13 +260,9 @@ int run_command(const std::string& dir, int jobs, bool retry_failed, bool quiet)
 }
 
 int status_command(const std::string& dir) {
-  ffd::SweepPlan plan;
-  try {
-    plan = ffd::read_sweep_plan(dir);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-    return kExitBadInput;
-  }
+  const std::optional<ffd::SweepPlan> read = read_plan(dir);
+  if (!read) return kExitBadInput;
+  const ffd::SweepPlan& plan = *read;
   std::size_t count[3] = {0, 0, 0};
   std::string failed, missing;
   for (const ffd::SweepJob& job : plan.jobs) {
