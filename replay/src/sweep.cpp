@@ -366,12 +366,6 @@ std::string sweep_value_text(const SweepValue& value) {
   return std::get<std::string>(value);
 }
 
-std::vector<std::string> sweep_parameter_names() {
-  std::vector<std::string> names;
-  for (const ParameterDef& def : parameter_defs()) names.emplace_back(def.name);
-  return names;
-}
-
 SweepPlan parse_sweep(const std::string& text, const std::string& origin, const std::string& base_dir) {
   return SweepReader(origin, base_dir).read(parse_toml(text, origin));
 }
@@ -394,25 +388,33 @@ LoadedReplay load_sweep_job(const SweepPlan& plan, const SweepJob& job) {
       p->def->set_simulation(scene.settings, job.values[i]);
       continue;
     }
-    bool found = false;
+    bool named = false, applied = false;
     for (ObjectSpec& object : scene.objects) {
       if (!p->object.empty() && object.name != p->object) continue;
-      found = true;
-      if (object.dynamics == DynamicsKind::MassSpring) p->def->set_object(object.mass_spring, job.values[i]);
+      named = true;
+      if (object.dynamics != DynamicsKind::MassSpring) continue;
+      p->def->set_object(object.mass_spring, job.values[i]);
+      applied = true;
     }
-    if (!found) {
+    if (!named) {
       std::vector<std::string_view> names;
       for (const ObjectSpec& object : scene.objects) names.push_back(object.name);
       throw InputError(plan.sweep_file + ": " + name + ": the replay's scene has no object " + in_quotes(p->object) +
                        " (its objects: " + join(names) + ")");
     }
+    if (!applied)
+      throw InputError(plan.sweep_file + ": " + name + ": " +
+                       (p->object.empty() ? std::string("the replay's scene has no mass-spring object")
+                                          : "object " + in_quotes(p->object) + " is not a mass-spring object") +
+                       " (it is a [mass_spring] key)");
   }
   // A parameter the replay's own commands set would hold only until the first of them: refused.
   for (std::size_t i = 0; i < plan.parameters.size(); ++i) {
     const auto p = find_parameter(plan.parameters[i]);
     if (!p->def->command) continue;
     for (const Command& c : replay.script.commands)
-      if (c.kind == *p->def->command) {
+      if (c.kind == *p->def->command &&
+          (p->object.empty() || c.object == kNoIndex || replay.model.objects[c.object].name == p->object)) {
         throw InputError(plan.sweep_file + ": " + plan.parameters[i] + ": the replay " + plan.replay +
                          " sets it itself (a " + command_name(c.kind) + " command at step " + std::to_string(c.step) +
                          "), which would override the sweep's value: sweep another parameter or a replay without it");
@@ -608,13 +610,29 @@ SweepPlan read_sweep_plan(const std::string& dir) {
     plan.threads = j.value("threads", 1);
     plan.plan_s = j.value("plan_s", 0.0);
     plan.parameters = j.at("parameters").get<std::vector<std::string>>();
+    std::vector<ValueKind> kinds;
+    for (const std::string& name : plan.parameters) {
+      const auto p = find_parameter(name);
+      if (!p) throw InputError(path + ": " + name + ": not a parameter a sweep can vary");
+      kinds.push_back(p->def->kind);
+    }
     for (const nlohmann::json& job : j.at("jobs")) {
       SweepJob out;
       out.id = job.at("id").get<std::string>();
       for (const nlohmann::json& v : job.at("values")) out.values.push_back(value_from_json(v, path));
       if (out.values.size() != plan.parameters.size()) throw InputError(path + ": job " + out.id + ": wrong number of values");
+      for (std::size_t i = 0; i < kinds.size(); ++i) {
+        const SweepValue& v = out.values[i];
+        const bool fits = kinds[i] == ValueKind::Number   ? std::holds_alternative<double>(v) || std::holds_alternative<std::int64_t>(v)
+                          : kinds[i] == ValueKind::Integer ? std::holds_alternative<std::int64_t>(v)
+                          : kinds[i] == ValueKind::Flag    ? std::holds_alternative<bool>(v)
+                                                           : std::holds_alternative<std::string>(v);
+        if (!fits) throw InputError(path + ": job " + out.id + ": " + plan.parameters[i] + ": a value of the wrong type");
+        if (kinds[i] == ValueKind::Number) out.values[i] = number_of(v);  // 2 as 2.0, as the sweep file reads it
+      }
       plan.jobs.push_back(std::move(out));
     }
+    if (plan.jobs.empty()) throw InputError(path + ": the plan holds no job");
     return plan;
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path + ": not a sweep plan (" + e.what() + ")");
@@ -627,15 +645,6 @@ const SweepJob* find_sweep_job(const SweepPlan& plan, const std::string& id) {
   return nullptr;
 }
 
-const char* job_state_name(JobState state) {
-  switch (state) {
-    case JobState::Done: return "done";
-    case JobState::Failed: return "failed";
-    case JobState::Missing: return "missing";
-  }
-  return "missing";
-}
-
 namespace {
 // A result's parameters as the plan would write them: what "matches the plan" compares.
 nlohmann::json job_values_json(const SweepPlan& plan, const SweepJob& job) {
@@ -644,23 +653,36 @@ nlohmann::json job_values_json(const SweepPlan& plan, const SweepJob& job) {
   return values;
 }
 
+// A job's result, if the file holds one as sweep_job_result_json / sweep_job_failure_json
+// write it (anything else, edited or foreign, counts as missing: the job runs again).
 std::optional<nlohmann::json> read_result(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception&) {
-    return std::nullopt;  // not one of ours (results are written whole): missing
-  }
+  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  const auto has = [&](const char* key, auto is) { return j.contains(key) && (j[key].*is)(); };
+  if (!j.is_object() || !has("replay", &nlohmann::json::is_string) || !has("state", &nlohmann::json::is_string) ||
+      !has("exit_code", &nlohmann::json::is_number_integer) || !has("parameters", &nlohmann::json::is_object))
+    return std::nullopt;
+  if (j.contains("metrics") && !j["metrics"].is_object()) return std::nullopt;
+  for (const char* time : {"load_s", "run_s", "job_s"})
+    if (j.contains(time) && !j[time].is_number()) return std::nullopt;
+  return j;
+}
+
+// The value of a ranked metric of a job done, if it has one.
+std::optional<double> done_metric(const std::optional<nlohmann::json>& r, const std::string& name) {
+  if (!r || r->at("state") != "done" || !r->contains("metrics") || !r->at("metrics").contains(name) ||
+      !r->at("metrics").at(name).is_number())
+    return std::nullopt;
+  return r->at("metrics").at(name).get<double>();
 }
 }  // namespace
 
 JobState sweep_job_state(const SweepPlan& plan, const std::string& dir, const SweepJob& job) {
   const auto result = read_result(sweep_result_path(dir, job.id));
-  if (!result || !result->is_object() || result->value("replay", "") != plan.replay ||
-      result->value("parameters", nlohmann::json()) != job_values_json(plan, job))
+  if (!result || result->at("replay") != plan.replay || result->at("parameters") != job_values_json(plan, job))
     return JobState::Missing;
-  return result->value("state", "") == "done" ? JobState::Done : JobState::Failed;
+  return result->at("state") == "done" ? JobState::Done : JobState::Failed;
 }
 
 namespace {
@@ -727,7 +749,7 @@ SweepTimes sweep_times(const SweepPlan& plan, const std::string& dir) {
   SweepTimes times;
   for (const SweepJob& job : plan.jobs) {
     if (sweep_job_state(plan, dir, job) == JobState::Missing) continue;
-    const std::optional<nlohmann::json> r = read_result(sweep_result_path(dir, job.id));
+    const std::optional<nlohmann::json> r = read_result(sweep_result_path(dir, job.id));  // its times numbers
     if (!r || !r->contains("load_s") || !r->contains("run_s") || !r->contains("job_s")) continue;
     const double load = r->at("load_s").get<double>(), run = r->at("run_s").get<double>();
     ++times.jobs;
@@ -784,7 +806,8 @@ SweepMerge merge_sweep(const std::string& dir, const std::vector<std::string>& a
     csv << job.id;
     for (const SweepValue& v : job.values) csv << ',' << sweep_value_text(v);
     const std::optional<nlohmann::json>& r = results[j];
-    csv << ',' << (r ? r->value("state", "failed") : "missing") << ',' << (r ? std::to_string(r->value("exit_code", -1)) : "");
+    csv << ',' << (r ? r->at("state").get<std::string>() : "missing") << ','
+        << (r ? std::to_string(r->at("exit_code").get<int>()) : "");
     for (const std::string& name : metrics) {
       csv << ',';
       if (r && r->contains("metrics") && r->at("metrics").contains(name)) csv << metric_text(r->at("metrics").at(name));
@@ -813,14 +836,9 @@ SweepMerge merge_sweep(const std::string& dir, const std::vector<std::string>& a
   for (const std::string& name : ranked) {
     std::optional<std::size_t> best;
     double best_value = 0.0;
-    for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
-      const std::optional<nlohmann::json>& r = results[j];
-      if (!r || r->value("state", "") != "done" || !r->contains("metrics") || !r->at("metrics").contains(name) ||
-          !r->at("metrics").at(name).is_number())
-        continue;
-      const double v = r->at("metrics").at(name).get<double>();
-      if (!best || v < best_value) best = j, best_value = v;
-    }
+    for (std::size_t j = 0; j < plan.jobs.size(); ++j)
+      if (const std::optional<double> v = done_metric(results[j], name); v && (!best || *v < best_value))
+        best = j, best_value = *v;
     if (!best) continue;
     char value[32];
     std::snprintf(value, sizeof value, "%.4g", best_value);
@@ -836,14 +854,11 @@ SweepMerge merge_sweep(const std::string& dir, const std::vector<std::string>& a
     for (const std::string& name : ranked) {
       std::map<std::pair<double, double>, double> cells;
       for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
-        const std::optional<nlohmann::json>& r = results[j];
-        if (!r || r->value("state", "") != "done" || !r->contains("metrics") || !r->at("metrics").contains(name) ||
-            !r->at("metrics").at(name).is_number())
-          continue;
+        const std::optional<double> v = done_metric(results[j], name);
+        if (!v) continue;
         const std::pair<double, double> at{number_of(plan.jobs[j].values[axes[0]]), number_of(plan.jobs[j].values[axes[1]])};
-        const double v = r->at("metrics").at(name).get<double>();
         const auto it = cells.find(at);
-        if (it == cells.end() || v < it->second) cells[at] = v;
+        if (it == cells.end() || *v < it->second) cells[at] = *v;
       }
       if (cells.empty()) continue;
       const std::string png = (maps / (name + ".png")).string();

@@ -120,6 +120,29 @@ TEST_CASE("Sweep files: bad ones name the file, line, column and field", "[sweep
       "s.toml", kSweeps);
   CHECK_THROWS_WITH(ffd::load_sweep_job(plan, plan.jobs[0]),
                     Catch::Contains("alpha: the replay") && Catch::Contains("sets it itself"));
+  // The same, for one object: only that object's own stiffness command counts.
+  const std::string alpha_beta = std::string(FFDSIM_SCENARIO_DIR) + "/replays/sweep_alpha_beta.toml";
+  const auto stiffness_of = [&](const std::string& object) {
+    return ffd::parse_sweep("format = \"ffdsim-sweep\"\nversion = 1\nreplay = \"" + alpha_beta + "\"\n[parameters]\n" +
+                                object + ".stiffness = [3000.0]\n",
+                            "s.toml", kSweeps);
+  };
+  const ffd::SweepPlan low = stiffness_of("teapot_low"), high = stiffness_of("teapot_high");
+  CHECK_NOTHROW(ffd::load_sweep_job(low, low.jobs[0]));
+  CHECK_THROWS_WITH(ffd::load_sweep_job(high, high.jobs[0]), Catch::Contains("sets it itself"));
+  // A [mass_spring] key where no object has one is an error, not a value left unused.
+  const fs::path dir = test::fresh_temp_dir("sweep_shape_matching");
+  fs::create_directories(dir);
+  std::ofstream(dir / "r.toml") << "format = \"ffdsim-replay\"\nversion = 1\nscene = \"" << FFDSIM_SCENARIO_DIR
+                                << "/scenes/shape_matching_pair.toml\"\nsteps = 10\n";
+  const auto shape_sweep = [&](const std::string& key) {
+    return ffd::parse_sweep("format = \"ffdsim-sweep\"\nversion = 1\nreplay = \"r.toml\"\n[parameters]\n" + key +
+                                " = [1000.0]\n",
+                            "s.toml", dir.string());
+  };
+  const ffd::SweepPlan all = shape_sweep("stiffness"), ball = shape_sweep("ball.stiffness");
+  CHECK_THROWS_WITH(ffd::load_sweep_job(all, all.jobs[0]), Catch::Contains("the replay's scene has no mass-spring object"));
+  CHECK_THROWS_WITH(ffd::load_sweep_job(ball, ball.jobs[0]), Catch::Contains("object 'ball' is not a mass-spring object"));
   const ffd::SweepPlan nobody = ffd::parse_sweep(kHead + "[parameters]\nmiddle.damping = [0.1]\n", "s.toml", kSweeps);
   CHECK_THROWS_WITH(ffd::load_sweep_job(nobody, nobody.jobs[0]), Catch::Contains("no object 'middle' (its objects: low, high)"));
 }
@@ -288,6 +311,21 @@ TEST_CASE("ffdsim sweep: a failing job is written as failed with its exit code, 
   CHECK(gone.at("state") == "failed");
   CHECK(gone.at("exit_code") == 2);
   CHECK_THAT(gone.at("error").get<std::string>(), Catch::Contains("gone.toml"));
+  // An edited plan or result: a clear error, or the job counted as not run; never a crash.
+  {
+    std::string plan = test::read_text(fs::path(out2) / "plan.json");
+    plan.replace(plan.find("0.5"), 3, "\"x\"");
+    std::ofstream(fs::path(out2) / "plan.json") << plan;
+  }
+  r = test::run_ffdsim("sweep status " + out2);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains("plan.json: job 0001: beta: a value of the wrong type"));
+  std::ofstream(fs::path(out) / "results" / "0001.json") << "{\"replay\": 5, \"state\": [], \"exit_code\": \"0\"}";
+  r = test::run_ffdsim("sweep status " + out);
+  CHECK(r.exit_code == 4);
+  CHECK_THAT(r.output, Catch::Contains("missing: 0001"));
+  CHECK(test::run_ffdsim("sweep merge " + out + " -q").exit_code == 0);
+
   // Bad command lines and folders.
   CHECK(test::run_ffdsim("sweep run-one " + out2 + " 0099").exit_code == 2);
   CHECK(test::run_ffdsim("sweep status " + (dir / "nowhere").string()).exit_code == 2);

@@ -41,18 +41,15 @@ std::string self_program() {
   return error ? std::string("ffdsim") : self.string();
 }
 
-// The last `lines` lines of a file (at most 4 KiB), for a failed job's record.
+// The last `lines` lines of a file (of its last 4 KiB), for a failed job's record.
 std::string tail_of_file(const std::string& path, int lines = 20) {
   std::ifstream in(path, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (text.size() > 4096) text = text.substr(text.size() - 4096);
-  std::size_t at = text.size();
-  for (int n = 0; n <= lines && at > 0; ++n) {
-    const std::size_t nl = text.rfind('\n', at - 1);
-    if (nl == std::string::npos) return text;
-    if (n < lines) at = nl;
-  }
-  return text.substr(at == text.size() ? at : at + 1);
+  if (text.size() > 4096) text.erase(0, text.size() - 4096);
+  int seen = 0;  // line ends before the text's last character: each starts a line after it
+  for (std::size_t i = text.size(); i-- > 1;)
+    if (text[i - 1] == '\n' && ++seen == lines) return text.substr(i);
+  return text;
 }
 
 // Runs `argv` with its stdout and stderr into `log`; its exit code, or 128 + the signal that
@@ -164,9 +161,8 @@ int exec_command(const std::string& dir, const std::string& id, const std::strin
     job = ffd::find_sweep_job(plan, id);
     if (!job) throw ffd::InputError(dir + "/plan.json: no job " + id);
     replay = ffd::load_sweep_job(plan, *job);
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // run-one records the job as failed, with this message from its log
     std::fprintf(stderr, "ffdsim: error: %s\n", e.what());
-    if (job) ffd::write_file_atomically(out, ffd::sweep_job_failure_json(plan, *job, kExitBadInput, e.what()));
     return kExitBadInput;
   }
   ffd::ReplayRunOptions run;

@@ -43,9 +43,6 @@ struct SweepPlan {
 SweepPlan load_sweep_file(const std::string& path);
 SweepPlan parse_sweep(const std::string& text, const std::string& origin, const std::string& base_dir);
 
-// The parameters a sweep may vary, with what each sets (for messages and docs).
-std::vector<std::string> sweep_parameter_names();
-
 // The replay with job `values` applied to its scene (and its hash checks dropped: a point
 // that changes the physics changes the state). Throws InputError naming the parameter.
 LoadedReplay load_sweep_job(const SweepPlan& plan, const SweepJob& job);
@@ -61,7 +58,7 @@ std::string sweep_point_scene(const SweepPlan& plan, const SweepJob& job);
 // the scripts run `program` (this ffdsim, by its absolute path). Throws std::runtime_error
 // naming the file it could not write.
 void write_sweep_plan(const SweepPlan& plan, const std::string& dir, const std::string& program);
-// Reads DIR/plan.json back. Throws InputError naming the file.
+// Reads DIR/plan.json back, its parameters and values checked. Throws InputError naming the file.
 SweepPlan read_sweep_plan(const std::string& dir);
 const SweepJob* find_sweep_job(const SweepPlan& plan, const std::string& id);
 
@@ -82,7 +79,6 @@ std::string sweep_job_failure_json(const SweepPlan& plan, const SweepJob& job, i
 void write_file_atomically(const std::string& path, const std::string& text);
 
 enum class JobState { Done, Failed, Missing };
-const char* job_state_name(JobState state);
 // What results/ID.json says of the job: done (its replay ran and its assertions held),
 // failed (it ran and an assertion failed, or it crashed or could not start), or missing (no
 // result, or one left by another plan's job of the same id).
