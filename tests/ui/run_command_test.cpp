@@ -119,11 +119,17 @@ TEST_CASE("Viewer: the scene reloads when its file changes on disk, a change tha
   std::filesystem::create_directories(dir);
   const std::filesystem::path scene = dir / "scene.toml";
   std::filesystem::copy_file(kMinimal, scene);
-  // While the headless viewer runs for 4 s: at 1.5 s a valid edit, at 2.5 s a broken one.
+  // Each edit waits for the viewer to have answered the one before (no fixed timings: a loaded
+  // machine may take seconds for a frame); SIGINT ends the run as Ctrl-C would.
+  const std::string log = (dir / "viewer.log").string();
+  const std::string report = (dir / "report.json").string();
   const test::ProgramResult r = test::run_shell(
-      "(sleep 1.5; echo '# edited' >> " + scene.string() + "; sleep 1; echo 'broken = ' >> " + scene.string() +
-      ") & env XDG_CONFIG_HOME=" + (dir / "config").string() + " " FFDSIM_BINARY " run --headless --seconds 4 --frames " +
-      (dir / "frames").string() + " " + scene.string() + "; status=$?; wait; exit $status");
+      "wait_for() { i=0; until grep -q \"$1\" \"$2\" 2>/dev/null; do i=$((i+1)); [ $i -gt 1200 ] && return 1; sleep 0.1; done; }; "
+      "env XDG_CONFIG_HOME=" + (dir / "config").string() + " " FFDSIM_BINARY " run --headless --seconds 300 --frames " +
+      (dir / "frames").string() + " --report " + report + " " + scene.string() + " > " + log + " 2>&1 & pid=$!; "
+      "wait_for '\"mode\"' " + report + " && echo '# edited' >> " + scene.string() + " && "
+      "wait_for 'changed on disk' " + log + " && echo 'broken = ' >> " + scene.string() + " && "
+      "wait_for 'not reloaded' " + log + "; kill -INT $pid; wait $pid; status=$?; cat " + log + "; exit $status");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.output, Catch::Contains("reloaded " + scene.string() + ": it changed on disk"));
