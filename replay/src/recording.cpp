@@ -102,7 +102,7 @@ std::string hash_block(std::uint64_t step, std::uint64_t hash) {
 
 std::string recording_text(const Model& model, const Recording& r) {
   std::ostringstream s;
-  s << "# Recorded by ffdsim run. Replay with: ffdsim replay THIS_FILE --fast\n"
+  s << "# Recorded by ffdsim. Replay with: ffdsim replay THIS_FILE --fast\n"
     << "format = \"ffdsim-replay\"\n"
     << "version = 1\n"
     << "description = \"recorded session: " << r.commands.size() << " commands over " << r.steps << " steps\"\n"
