@@ -26,7 +26,10 @@ packages=(build-essential cmake ninja-build pkg-config libeigen3-dev libtomlplus
           python3
           # ffdsim sweep's engines: GNU parallel (cores or ssh hosts) and Slurm (job arrays); the
           # tests run a sweep through each, Slurm as a one-node cluster of their own
-          parallel slurm-wlm munge)
+          parallel slurm-wlm munge
+          # the Python module (ui/python): pybind11 for Debian's Python, NumPy; pytest runs its
+          # tests and matplotlib draws the examples' plots
+          pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
