@@ -6,7 +6,7 @@
 
 #include <atomic>
 #include <optional>
-#include <regex>
+#include <cctype>
 #include <stdexcept>
 #include <string>
 
@@ -27,23 +27,40 @@ namespace {
 PyObject* g_scene_error = nullptr;   // ffdsim.SceneError
 PyObject* g_replay_error = nullptr;  // ffdsim.ReplayError
 
-// Raises `type` (SceneError or ReplayError) with the loader's message and, when the message
-// starts with one ("scene.toml:12:5: ..."), its file, line and column as attributes.
+// Where a loader's message places its problem: "scene.toml:12:5: ..." gives the file, the
+// line and the column; a message without one ("scene.toml: object 'box': ...") the file alone.
+struct Place {
+  std::optional<std::string> file;
+  std::optional<int> line, column;
+};
+
+Place place_of(const std::string& message) {
+  auto digits_at = [&](std::size_t i, std::size_t& end) {
+    end = i;
+    while (end < message.size() && end - i < 9 && std::isdigit(static_cast<unsigned char>(message[end]))) ++end;
+    return end > i;
+  };
+  for (std::size_t colon = message.find(':'); colon != std::string::npos; colon = message.find(':', colon + 1)) {
+    std::size_t line_end = 0, column_end = 0;
+    if (digits_at(colon + 1, line_end) && line_end < message.size() && message[line_end] == ':' &&
+        digits_at(line_end + 1, column_end) && message.compare(column_end, 2, ": ") == 0)
+      return {message.substr(0, colon), std::stoi(message.substr(colon + 1, line_end - colon - 1)),
+              std::stoi(message.substr(line_end + 1, column_end - line_end - 1))};
+  }
+  const std::size_t colon = message.find(": ");
+  if (colon == std::string::npos) return {};
+  return {message.substr(0, colon), std::nullopt, std::nullopt};
+}
+
+// Raises `type` (SceneError or ReplayError) with the loader's message, and its place as the
+// attributes file, line and column (None where it has none).
 [[noreturn]] void raise_input_error(PyObject* type, const std::string& message) {
   py::object error = py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", message.c_str()));
   if (!error) throw py::error_already_set();
-  static const std::regex located(R"(^(.+?):(\d+):(\d+): )");
-  std::smatch m;
-  if (std::regex_search(message, m, located)) {
-    error.attr("file") = m[1].str();
-    error.attr("line") = std::stoi(m[2].str());
-    error.attr("column") = std::stoi(m[3].str());
-  } else {
-    const std::size_t colon = message.find(": ");
-    error.attr("file") = colon == std::string::npos ? py::none() : py::cast(message.substr(0, colon));
-    error.attr("line") = py::none();
-    error.attr("column") = py::none();
-  }
+  const Place place = place_of(message);
+  error.attr("file") = place.file ? py::cast(*place.file) : py::none();
+  error.attr("line") = place.line ? py::cast(*place.line) : py::none();
+  error.attr("column") = place.column ? py::cast(*place.column) : py::none();
   PyErr_SetObject(type, error.ptr());
   throw py::error_already_set();
 }
