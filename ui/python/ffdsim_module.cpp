@@ -370,7 +370,7 @@ See docs/python.md.)";
            "N/m: the probe's virtual coupling spring (scene with the \"probe\" effect).")
       .def("set_accuracy",
            [](PySimulation& s, int level) { s.queue({.kind = CommandKind::SetAccuracy, .value = static_cast<double>(level)}); },
-           "level"_a, "Collision accuracy level 0..5 (docs/collision.md).")
+           "level"_a, "Collision accuracy level 0..5 (docs/accuracy.md).")
       .def("set_response",
            [](PySimulation& s, const std::string& name) {
              ContactResponse r;

@@ -7,8 +7,8 @@ Each trial builds the scene as text (a block resting on a plane tilted by ANGLE_
 settle for 0.3 s, then measures how far it slides down the slope in the next second. A block
 that moved less than 1 mm sticks. The plot shows the slide of every trial against its beta.
 The scene uses the contact response "solver", whose friction holds a contact that sticks
-(docs/collision.md); beta then plays the part of a Coulomb friction coefficient, and the
-answer comes out near tan(angle).
+(docs/step.md, "Two contact responses"); beta then plays the part of a Coulomb friction
+coefficient, and the answer comes out near tan(angle).
 """
 import math
 import sys
