@@ -108,6 +108,11 @@ struct ObjectHandle {
   Index index;
   PySimulation& sim() const { return owner.cast<PySimulation&>(); }
   const ObjectModel& model() const { return sim().get().model().objects[index]; }
+  // A read-only view of this object's rows of a per-node array (State::x, State::v, ...).
+  py::array node_view(const std::vector<Vec3>& all) const {
+    const ObjectModel& om = model();
+    return vec3_view(all.data() + om.node_begin, om.node_end - om.node_begin, owner);
+  }
 };
 
 template <class Load>
@@ -211,25 +216,16 @@ See docs/python.md.)";
       .def_property_readonly("index", [](const ObjectHandle& o) { return o.index; })
       .def_property_readonly(
           "nodes",
-          [](const ObjectHandle& o) {
-            const ObjectModel& om = o.model();
-            return vec3_view(o.sim().get().state().x.data() + om.node_begin, om.node_end - om.node_begin, o.owner);
-          },
+          [](const ObjectHandle& o) { return o.node_view(o.sim().get().state().x); },
           "(N, 3) float64, m: the lattice node positions. A read-only view: it follows the simulation as it steps "
           "and keeps the simulation alive.")
       .def_property_readonly(
           "velocities",
-          [](const ObjectHandle& o) {
-            const ObjectModel& om = o.model();
-            return vec3_view(o.sim().get().state().v.data() + om.node_begin, om.node_end - om.node_begin, o.owner);
-          },
+          [](const ObjectHandle& o) { return o.node_view(o.sim().get().state().v); },
           "(N, 3) float64, m/s: the lattice node velocities. A read-only view, as nodes.")
       .def_property_readonly(
           "rest_nodes",
-          [](const ObjectHandle& o) {
-            const ObjectModel& om = o.model();
-            return vec3_view(o.sim().get().model().node_rest.data() + om.node_begin, om.node_end - om.node_begin, o.owner);
-          },
+          [](const ObjectHandle& o) { return o.node_view(o.sim().get().model().node_rest); },
           "(N, 3) float64, m: the lattice node positions at rest, before the object is placed. A read-only view.")
       .def_property_readonly(
           "triangles",
