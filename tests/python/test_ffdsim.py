@@ -204,6 +204,11 @@ def test_bad_calls_raise_and_leave_the_simulation_as_it_was():
         sim.set_response("fast")
     with pytest.raises(ValueError):
         sim.step(-1)
+    for threads in (-1, 65):
+        with pytest.raises(ValueError, match="threads"):
+            ffdsim.Simulation(TEAPOTS, threads=threads)
+    with pytest.raises(ValueError, match="hash_every"):
+        ffdsim.Simulation(TEAPOTS, hash_every=0)
     with pytest.raises(RuntimeError, match="take a step"):
         sim.save_recording("/tmp/never_written.toml")
     sim.step(10)

@@ -450,7 +450,7 @@ See docs/python.md.)";
           raise_input_error(g_replay_error, e.what());
         }
         ReplayRunOptions run;
-        run.threads = threads > 0 ? threads : default_thread_count();
+        run.threads = thread_count(threads);
         run.check_latency = check_latency;
         {
           py::gil_scoped_release release;

@@ -17,6 +17,12 @@ std::filesystem::path absolute_normal(const std::string& path) {
 
 }  // namespace
 
+int thread_count(int threads) {
+  if (threads < 0 || threads > 64)
+    throw std::invalid_argument("threads must be 0 (the default) or 1 to 64 (got " + std::to_string(threads) + ")");
+  return threads > 0 ? threads : default_thread_count();
+}
+
 std::unique_ptr<Simulation> Simulation::from_file(const std::string& path, int threads, std::uint32_t hash_every) {
   const std::string absolute = absolute_normal(path).string();
   SceneSpec spec = load_scene_file(absolute);
@@ -44,7 +50,7 @@ Simulation::Simulation(SceneSpec spec, std::string scene_path, std::string scene
   model_ = compile_scene(spec_, scene_path_.empty() ? spec_.name : scene_path_, log);
   initial_ = initial_state(model_);
   state_ = initial_;
-  pool_ = std::make_unique<WorkerPool>(threads > 0 ? threads : default_thread_count());
+  pool_ = std::make_unique<WorkerPool>(thread_count(threads));
   scratch_ = make_scratch(model_);
   attach_pool(model_, scratch_, *pool_);
 }

@@ -17,6 +17,10 @@
 
 namespace ffd::python {
 
+// `threads` as the Python calls take it: 0 for the command line's default, else 1..64 (as
+// --threads). Throws std::invalid_argument for anything else.
+int thread_count(int threads);
+
 class Simulation {
  public:
   // A scene file. Throws InputError ("file:line:column: field: problem") for a scene that does
