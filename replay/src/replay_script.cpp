@@ -74,13 +74,7 @@ class ScriptReader {
     LoadedReplay out{ReplayScript{}, Model{}};
     ReplayScript& script = out.script;
     script.path = origin_;
-    if (const auto format = root.string("format"); format && *format != "ffdsim-replay")
-      root.fail_at("format", "expected \"ffdsim-replay\" (got " + in_quotes(*format) + ")");
-    if (!root.has("version")) root.fail_missing("version", " (this program reads version = 1)");
-    const std::int64_t version = root.integer("version", 0, 1, std::numeric_limits<std::int64_t>::max());
-    if (version != kReplayFormatVersion)
-      root.fail_at("version", "unsupported version " + std::to_string(version) + "; this program reads version " +
-                                  std::to_string(kReplayFormatVersion));
+    root.check_format("ffdsim-replay", kReplayFormatVersion);
     script.description = root.string("description").value_or("");
 
     read_recorded(root, script);

@@ -145,13 +145,7 @@ class SweepReader {
     const TableReader root(origin_, root_table, "", kRootKeys);
     SweepPlan plan;
     plan.sweep_file = origin_.empty() ? origin_ : fs::absolute(origin_).lexically_normal().string();
-    if (const auto format = root.string("format"); format && *format != "ffdsim-sweep")
-      root.fail_at("format", "expected \"ffdsim-sweep\" (got " + in_quotes(*format) + ")");
-    if (!root.has("version")) root.fail_missing("version", " (this program reads version = 1)");
-    const std::int64_t version = root.integer("version", 0, 1, std::numeric_limits<std::int64_t>::max());
-    if (version != kSweepFormatVersion)
-      root.fail_at("version", "this program reads version " + std::to_string(kSweepFormatVersion) + " (got " +
-                                  std::to_string(version) + ")");
+    root.check_format("ffdsim-sweep", kSweepFormatVersion);
     plan.description = root.string("description").value_or("");
     const auto replay = root.string("replay");
     if (!replay) root.fail_missing("replay", " (the replay script every job runs)");

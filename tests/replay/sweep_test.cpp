@@ -112,6 +112,10 @@ TEST_CASE("Sweep files: bad ones name the file, line, column and field", "[sweep
              Catch::Contains("point[1].alpha: missing required key"));
   CHECK_THAT(sweep_error("format = \"ffdsim-sweep\"\nversion = 1\n[parameters]\nalpha = [0.1]\n"),
              Catch::Contains("replay: missing required key"));
+  CHECK_THAT(sweep_error("format = \"ffdsim-sweep\"\nversion = 2\nreplay = \"drop.toml\"\n[parameters]\nalpha = [0.1]\n"),
+             Catch::Contains("s.toml:2:11: version: unsupported version 2; this program reads version 1"));
+  CHECK_THAT(sweep_error("format = \"ffdsim-replay\"\nversion = 1\nreplay = \"drop.toml\"\n[parameters]\nalpha = [0.1]\n"),
+             Catch::Contains("format: expected \"ffdsim-sweep\""));
   CHECK_THAT(sweep_error(kHead + "[parameters]\nalpha = [0.1\n"), Catch::Contains("s.toml:5:") && Catch::Contains("TOML syntax error"));
   // A parameter the replay sets itself would be overridden: refused when the job loads.
   const ffd::SweepPlan plan = ffd::parse_sweep(

@@ -129,6 +129,17 @@ class TableReader {
     return v;
   }
 
+  // A file format's header: `format` (optional, must be `name` when given) and `version`
+  // (required, must be `version`).
+  void check_format(std::string_view name, std::int64_t version) const {
+    if (const auto given = string("format"); given && *given != name)
+      fail_at("format", "expected \"" + std::string(name) + "\" (got " + in_quotes(*given) + ")");
+    const std::string reads = "this program reads version " + std::to_string(version);
+    if (!has("version")) fail_missing("version", " (" + reads + ")");
+    const std::int64_t given = integer("version", 0, 1, std::numeric_limits<std::int64_t>::max());
+    if (given != version) fail_at("version", "unsupported version " + std::to_string(given) + "; " + reads);
+  }
+
   bool boolean(std::string_view key, bool fallback) const {
     const toml::node* node = find(key);
     if (!node) return fallback;
