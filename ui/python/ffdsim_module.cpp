@@ -14,7 +14,6 @@
 #include "ffd/replay_runner.h"
 #include "ffd/replay_script.h"
 #include "ffd/scene_loader.h"
-#include "ffd/trilinear.h"
 #include "simulation.h"
 
 namespace py = pybind11;
@@ -242,16 +241,11 @@ See docs/python.md.)";
       .def(
           "surface_vertices",
           [](const ObjectHandle& o) {
-            const ObjectModel& om = o.model();
-            const State& state = o.sim().get().state();
-            const Model& model = o.sim().get().model();
-            const std::size_t n = om.vertex_local.size();
-            py::array_t<double> a({n, std::size_t{3}});
-            for (std::size_t v = 0; v < n; ++v) {
-              const std::array<Index, 8>& corner = model.cell_nodes[om.vertex_cell[v]];
-              const Vec3 p = trilinear_map(om.vertex_local[v], [&](int j) -> const Vec3& { return state.x[corner[j]]; });
-              for (int k = 0; k < 3; ++k) a.mutable_at(v, k) = p[k];
-            }
+            const Simulation& sim = o.sim().get();
+            const std::vector<Vec3> vertices = deformed_surface(sim.model(), sim.state(), o.index).vertices;
+            py::array_t<double> a({vertices.size(), std::size_t{3}});
+            for (std::size_t v = 0; v < vertices.size(); ++v)
+              for (int k = 0; k < 3; ++k) a.mutable_at(v, k) = vertices[v][k];
             return a;
           },
           "(V, 3) float64, m: the embedded surface's vertices where the lattice has moved them now (eq. 1, "
