@@ -24,15 +24,17 @@ int thread_count(int threads) {
 }
 
 std::unique_ptr<Simulation> Simulation::from_file(const std::string& path, int threads, std::uint32_t hash_every) {
-  const std::string absolute = absolute_normal(path).string();
-  SceneSpec spec = load_scene_file(absolute);
+  const std::filesystem::path absolute = absolute_normal(path);
+  thread_count(threads);  // a bad count before a scene's load, however long that takes
+  SceneSpec spec = load_scene_file(absolute.string());
   return std::unique_ptr<Simulation>(
-      new Simulation(std::move(spec), absolute, "", absolute_normal(absolute).parent_path().string(), threads, hash_every));
+      new Simulation(std::move(spec), absolute.string(), "", absolute.parent_path().string(), threads, hash_every));
 }
 
 std::unique_ptr<Simulation> Simulation::from_text(const std::string& text, const std::string& origin,
                                                   const std::string& base_dir, int threads, std::uint32_t hash_every) {
   const std::string base = absolute_normal(base_dir).string();
+  thread_count(threads);
   SceneSpec spec = parse_scene(text, origin, base);
   return std::unique_ptr<Simulation>(new Simulation(std::move(spec), "", text, base, threads, hash_every));
 }
