@@ -207,6 +207,8 @@ def test_bad_calls_raise_and_leave_the_simulation_as_it_was():
     for threads in (-1, 65):
         with pytest.raises(ValueError, match="threads"):
             ffdsim.Simulation(TEAPOTS, threads=threads)
+        with pytest.raises(ValueError, match="threads"):  # before the script is read
+            ffdsim.replay("/nonexistent/replay.toml", threads=threads)
     with pytest.raises(ValueError, match="hash_every"):
         ffdsim.Simulation(TEAPOTS, hash_every=0)
     with pytest.raises(RuntimeError, match="take a step"):

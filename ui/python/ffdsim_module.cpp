@@ -5,8 +5,8 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
-#include <optional>
 #include <cctype>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -436,6 +436,9 @@ See docs/python.md.)";
   m.def(
       "replay",
       [](const std::string& path, int threads, bool check_latency) {
+        ReplayRunOptions run;
+        run.threads = thread_count(threads);  // a bad count before the script's load
+        run.check_latency = check_latency;
         auto out = std::make_unique<PyReplayResult>();
         LoadedReplay replay;
         try {
@@ -443,9 +446,6 @@ See docs/python.md.)";
         } catch (const InputError& e) {
           raise_input_error(g_replay_error, e.what());
         }
-        ReplayRunOptions run;
-        run.threads = thread_count(threads);
-        run.check_latency = check_latency;
         {
           py::gil_scoped_release release;
           out->result = run_replay(replay, run);
