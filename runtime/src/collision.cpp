@@ -547,25 +547,59 @@ bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& d
   return depth > 0.0;
 }
 
-// Level 5, the edges of one half of a pair of cells of two objects: the edges of cell_b's
-// triangles against cell_a's triangles. Two surfaces can cross edge through edge with no
-// vertex behind the other (thin parts, sharp edges), and a vertex that has gone past the
-// middle of a thin part is nearest its far side and no longer behind (test_vertices). An edge
-// that crosses a triangle now and did not at the start of the step came in during the step,
-// and the start says from which side (edge_way_back); one that crossed already goes out of
-// the face it crosses (crossed_way_out). The deepest crossing moves the cells that carry the
-// edge's end and the triangle's corner nearest to it apart, once per pair half, as a vertex
-// contact moves its cells. Within one object edges are not tested: in parts thinner than a
-// cell the pushes between a surface's own cells fed energy in. Nor under the response
-// "solver", whose springs and contacts are solved after this narrow phase and move what it
-// answered: there the edge contacts left more surfaces crossed than without them
-// (docs/notes/2026-11-28-code-findings.md#edges-within-one-object-and-under-the-solver).
-template <bool kFriction>
-void test_edges(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a,
-                const CellSurface& surface, StageCounters& counters, double& max_depth) {
+// The shortest way out for an edge pq that crossed triangle abc (now[0..4]) before this step
+// already: to the face's front or back, by the depth of its end furthest behind, or past one
+// of the triangle's edges rs, along the common perpendicular of the two lines by their
+// distance, whichever is least (at most `reach`). The response "solver"'s: its constraints
+// move the edge by the whole depth within the step, and a face's front taken blindly pushed
+// the top face's diagonal of a box, crossed by a box resting on it, sideways out of the upper
+// box's side by the reach instead of down by the fraction of a millimetre it was in.
+bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& depth) {
+  const Vec3 &p = now[0], &q = now[1];
+  const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+  const double length = face.norm();
+  if (!(length > 0.0)) return false;
+  const Vec3 front = face / length;
+  const double hp = front.dot(p - now[2]), hq = front.dot(q - now[2]);
+  depth = std::max(-hp, -hq);
+  normal = front;
+  if (std::max(hp, hq) < depth) {
+    depth = std::max(hp, hq);
+    normal = -front;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 &r = now[2 + k], &t = now[2 + (k + 1) % 3];
+    const Vec3 across = (q - p).cross(t - r);
+    const double across_length = across.norm();
+    if (!(across_length > 0.0)) continue;
+    // The signed distance of pq's line from rs's along `across`: moved by it, pq's line
+    // passes rs's on the other side, outside the triangle.
+    const double distance = across.dot(p - r) / across_length;
+    if (!(std::abs(distance) < depth)) continue;
+    depth = std::abs(distance);
+    normal = (distance > 0.0 ? -1.0 : 1.0) / across_length * across;
+  }
+  depth = std::min(depth, reach);
+  return depth > 0.0;
+}
+
+// Level 5's edge test, one half of a pair of cells of two objects: the deepest crossing of
+// an edge of cell_b's triangles through one of cell_a's triangles (depth 0: none). Two
+// surfaces can cross edge through edge with no vertex behind the other (thin parts, sharp
+// edges), and a vertex that has gone past the middle of a thin part is nearest its far side
+// and no longer behind (test_vertices). An edge that crosses a triangle now and did not at
+// the start of the step came in during the step, and the start says from which side
+// (edge_way_back); one that crossed already goes out of the face it crosses
+// (crossed_way_out). Within one object edges are not tested: in parts thinner than a cell
+// the pushes between a surface's own cells fed energy in.
+// `least`: an edge crossed already takes the least way out (the solver's), not the way to
+// the face's front (crossed_way_out, the paper's).
+EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, CollisionMemory& scratch, Index cell_b,
+                                   Index cell_a, const CellSurface& surface, StageCounters& counters, bool least) {
+  EdgeCrossing deepest;
   const Index tri_begin = surface.triangle_begin[cell_a], tri_end = surface.triangle_begin[cell_a + 1];
   const Index edge_begin = surface.edge_begin[cell_b], edge_end = surface.edge_begin[cell_b + 1];
-  if (tri_begin == tri_end || edge_begin == edge_end || cell_inverted(model, state, cell_a)) return;
+  if (tri_begin == tri_end || edge_begin == edge_end || cell_inverted(model, state, cell_a)) return deepest;
   const Index tri_count = tri_end - tri_begin;
   // The edges lie in the AABB of cell_b's triangles (of its edges' ends, for owned
   // triangles): only where it meets cell_a's can an edge cross a triangle.
@@ -591,7 +625,7 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
   }
   reach_lo = reach_lo.cwiseMax(edges_lo);
   reach_hi = reach_hi.cwiseMin(edges_hi);
-  if ((reach_lo.array() > reach_hi.array()).any()) return;
+  if ((reach_lo.array() > reach_hi.array()).any()) return deepest;
   // cell_a's triangles that reach into that region (all of them with a NaN about).
   if (surface.crossing) corners_finite = load_triangles(model, state, scratch, cell_a, surface);
   const bool finite = corners_finite && is_finite(reach_lo) && is_finite(reach_hi);
@@ -603,11 +637,7 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
     candidates += static_cast<Index>(!finite || !((scratch.triangle_max[t].array() < reach_lo.array()).any() ||
                                                   (scratch.triangle_min[t].array() > reach_hi.array()).any()));
   }
-  if (candidates == 0) return;
-  double deepest = 0.0;
-  Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
-  Index carrier_a = cell_a, carrier_b = cell_b;
-  bool deepest_fresh = false;  // the deepest crossing was made during this step
+  if (candidates == 0) return deepest;
   for (Index e = edge_begin; e < edge_end; ++e) {
     const std::array<Index, 2>& edge = surface.edges[e];
     const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
@@ -620,7 +650,8 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
       const Index t = near[c];
       if ((hi.array() < scratch.triangle_min[t].array()).any() || (lo.array() > scratch.triangle_max[t].array()).any())
         continue;
-      const std::array<Index, 3>& tri = model.surface_triangles[surface.triangles[tri_begin + t]];
+      const Index triangle = surface.triangles[tri_begin + t];
+      const std::array<Index, 3>& tri = model.surface_triangles[triangle];
       const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
       if (!segment_crosses_triangle(p, q, now[2], now[3], now[4])) continue;
       const std::vector<Vec3>& x0 = scratch.x_start;
@@ -631,26 +662,37 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
       double depth = 0.0;
       const bool crossed_at_start = segment_crosses_triangle(start[0], start[1], start[2], start[3], start[4]);
       if (crossed_at_start) {
-        if (!crossed_way_out(now, model.surface_contact_radius, normal, depth)) continue;
+        if (!(least ? least_way_out(now, model.surface_contact_radius, normal, depth)
+                    : crossed_way_out(now, model.surface_contact_radius, normal, depth)))
+          continue;
       } else if (!edge_way_back(now, start, model.surface_contact_radius, normal, depth)) {
         continue;
       }
-      if (!(depth > deepest)) continue;
-      deepest = depth;
-      deepest_normal = normal;
-      deepest_fresh = !crossed_at_start;
-      // Where the edge meets the triangle's plane, and the cells that carry the two there:
-      // the edge's end and the triangle's corner nearest to it (a long edge's ends, and so
-      // what moves it, may be cells away from the pair's cells).
+      if (!(depth > deepest.depth)) continue;
+      deepest.depth = depth;
+      deepest.normal = normal;
+      deepest.fresh = !crossed_at_start;
+      deepest.edge = edge;
+      deepest.triangle = triangle;
+      // Where the edge meets the triangle's plane: that far along it, and where in the
+      // triangle (its barycentric coordinates; the crossing lies inside, edges included).
       const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
       const double hp = face.dot(p - now[2]), hq = face.dot(q - now[2]);
-      deepest_point = hp != hq ? Vec3(p + hp / (hp - hq) * (q - p)) : Vec3(0.5 * (p + q));
+      deepest.along = hp != hq ? hp / (hp - hq) : 0.5;
+      deepest.point = p + deepest.along * (q - p);
+      const double area_sq = face.squaredNorm();
+      const double u = (now[4] - now[3]).cross(deepest.point - now[3]).dot(face) / area_sq;
+      const double v = (now[2] - now[4]).cross(deepest.point - now[4]).dot(face) / area_sq;
+      deepest.barycentric = Vec3(u, v, 1.0 - u - v);
+      // The cells that carry the edge's end and the triangle's corner nearest to the
+      // crossing (a long edge's ends, and so what moves it, may be cells away from the
+      // pair's cells).
       const auto nearest = [&](std::initializer_list<Index> vertices, std::initializer_list<Vec3> at) {
         Index best = *vertices.begin();
         double best_sq = INFINITY;
         auto v = vertices.begin();
         for (const Vec3& x : at) {
-          const double d_sq = (x - deepest_point).squaredNorm();
+          const double d_sq = (x - deepest.point).squaredNorm();
           if (d_sq < best_sq) {
             best_sq = d_sq;
             best = *v;
@@ -659,23 +701,37 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
         }
         return model.surface_vertex_cell[best];
       };
-      carrier_b = nearest({edge[0], edge[1]}, {p, q});
-      carrier_a = nearest({tri[0], tri[1], tri[2]}, {now[2], now[3], now[4]});
+      deepest.carrier_b = nearest({edge[0], edge[1]}, {p, q});
+      deepest.carrier_a = nearest({tri[0], tri[1], tri[2]}, {now[2], now[3], now[4]});
     }
   }
-  if (!(deepest > 0.0)) return;
+  return deepest;
+}
+
+// The paper's answer to an edge crossing (deepest_edge_crossing), at once: the cells that
+// carry the edge's end and the triangle's corner nearest to it move apart, once per pair
+// half, as a vertex contact moves its cells. Not under the response "solver", which takes the
+// crossing as a constraint (contact_solver.cpp, find_edge_contacts): answered here, its
+// springs and contacts, solved after, moved what this answered, and the edge contacts left
+// more surfaces crossed than without them
+// (docs/notes/2026-11-28-code-findings.md#edges-within-one-object-and-under-the-solver).
+template <bool kFriction>
+void test_edges(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a,
+                const CellSurface& surface, StageCounters& counters, double& max_depth) {
+  const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, cell_b, cell_a, surface, counters, false);
+  if (!(crossing.depth > 0.0)) return;
   ++counters.inter_contacts;
-  max_depth = std::max(max_depth, deepest);
-  scratch.record_contact(deepest_point, deepest_normal, deepest, ContactKind::Inter);
+  max_depth = std::max(max_depth, crossing.depth);
+  scratch.record_contact(crossing.point, crossing.normal, crossing.depth, ContactKind::Inter);
   // Past the face by the skin, as a vertex is put. A crossing made during this step is a
   // fresh contact and also rebounds (response.h; nothing at alpha = 1): moved out without
   // it, the edge kept (1 - alpha) of its approach and crossed again the next step, and at
   // level 4 the pushes fed energy in (docs/notes/2026-11-28-code-findings.md#edge-rebound).
   // One crossed already does not: its normal says little about how it got in.
-  respond_pair<kFriction>(model, state, carrier_a, carrier_b, deepest_normal, deepest + model.surface_skin,
-                          scratch.planes_hold, deepest_fresh);
-  invalidate_surface_around(model, scratch, carrier_a);
-  invalidate_surface_around(model, scratch, carrier_b);
+  respond_pair<kFriction>(model, state, crossing.carrier_a, crossing.carrier_b, crossing.normal,
+                          crossing.depth + model.surface_skin, scratch.planes_hold, crossing.fresh);
+  invalidate_surface_around(model, scratch, crossing.carrier_a);
+  invalidate_surface_around(model, scratch, crossing.carrier_b);
 }
 
 // Levels 0-3 with edge contacts: the pairs of cells of two objects whose owned triangles'
@@ -724,20 +780,15 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
   std::swap(scratch.box_hi, scratch.surface_hi);
 }
 
-// Under the paper's response, after the boxes' responses: level 5's edge contacts
-// (test_edges) on every pair of cells of two objects that the broad phase paired, each pair
-// of cells once: at level 4 the cells of sub-boxes paired, at levels 0-3 with edge contacts
-// the cells whose triangles' bounds meet (pair_cells_by_triangles). The boxes stop most of
-// a thin part's way in, but two crossed like an X hold no node of each other, and a crossing
-// once made stayed (docs/results/piles.md: the rows without edge contacts); the exact edges
-// send a crossed edge back the way it came.
-template <bool kFriction>
-void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch,
-                          StageCounters& counters, double& max_depth) {
+// The pairs of cells of two objects the edge tests take, each once and in cell order, both
+// awake or one of them: at level 4 the cells of the sub-boxes the broad phase paired, at
+// levels 0-3 the cells whose triangles' bounds meet (pair_cells_by_triangles). on_pair(c1, c2)
+// for each.
+template <class OnPair>
+void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+                             StageCounters& counters, const OnPair& on_pair) {
   begin_surface_tests(scratch);
-  const bool by_cells = &boxes != &model.sub_boxes;  // levels 0-3
-  if (by_cells) pair_cells_by_triangles(model, boxes, state, scratch, counters);
-  const CellSurface surface = by_cells ? owned_surface(model) : crossing_surface(model);
+  if (&boxes != &model.sub_boxes) pair_cells_by_triangles(model, boxes, state, scratch, counters);
   std::uint64_t* keys = scratch.cell_pair_keys.data();
   Index count = 0;
   for (Index p = 0; p < scratch.pair_count; ++p) {
@@ -750,9 +801,29 @@ void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state,
   for (Index k = 0; k < count; ++k) {
     const auto c1 = static_cast<Index>(keys[k] >> 32), c2 = static_cast<Index>(keys[k] & 0xffffffffu);
     if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
+    on_pair(c1, c2);
+  }
+}
+
+// The edge tests' triangles: at levels 0-3 each cell's own, at level 4 those crossing it.
+CellSurface edge_surface(const Model& model, const BoxSet& boxes) {
+  return &boxes != &model.sub_boxes ? owned_surface(model) : crossing_surface(model);
+}
+
+// Under the paper's response, after the boxes' responses: level 5's edge contacts
+// (test_edges) on every pair of cells of two objects that the broad phase paired
+// (for_each_edge_cell_pair). The boxes stop most of a thin part's way in, but two crossed
+// like an X hold no node of each other, and a crossing once made stayed
+// (docs/results/piles.md: the rows without edge contacts); the exact edges send a crossed
+// edge back the way it came.
+template <bool kFriction>
+void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch,
+                          StageCounters& counters, double& max_depth) {
+  const CellSurface surface = edge_surface(model, boxes);
+  for_each_edge_cell_pair(model, boxes, state, scratch, counters, [&](Index c1, Index c2) {
     test_edges<kFriction>(model, state, scratch, c1, c2, surface, counters, max_depth);
     test_edges<kFriction>(model, state, scratch, c2, c1, surface, counters, max_depth);
-  }
+  });
 }
 
 }  // namespace
@@ -1072,6 +1143,22 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Col
       ensure_box(model, boxes, state, scratch, b, counters);
     }
   }
+}
+
+void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+                        StageCounters& counters) {
+  const CellSurface surface = edge_surface(model, boxes);
+  Index count = 0;
+  for_each_edge_cell_pair(model, boxes, state, scratch, counters, [&](Index c1, Index c2) {
+    for (const auto& [b, a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
+      const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, b, a, surface, counters, true);
+      if (!(crossing.depth > 0.0)) continue;
+      if (count < scratch.edge_crossings.size()) scratch.edge_crossings[count] = crossing;
+      ++count;
+    }
+  });
+  scratch.edge_crossing_count = static_cast<Index>(std::min<std::size_t>(count, scratch.edge_crossings.size()));
+  scratch.edge_crossings_dropped = count - scratch.edge_crossing_count;
 }
 
 template void collide_boxes<true>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);

@@ -16,6 +16,21 @@
 
 namespace ffd {
 
+// An edge of one object's surface through a triangle of another's (level 5's edge test,
+// collision.cpp): the edge is to go back along `normal` by `depth` (m), out of the way it came
+// in if it came in during the step (`fresh`), else out of the face it crosses.
+struct EdgeCrossing {
+  double depth = 0.0;                  // m (0: no crossing)
+  Vec3 normal = Vec3::Zero();          // unit, out of the triangle's side towards where the edge goes
+  Vec3 point = Vec3::Zero();           // m, where the edge meets the triangle's plane, now
+  bool fresh = false;                  // crossed during this step (not at its start)
+  std::array<Index, 2> edge{};         // surface vertices; point = (1 - along) edge[0] + along edge[1]
+  double along = 0.0;
+  Index triangle = 0;                  // Model::surface_triangles; point = barycentric . its corners
+  Vec3 barycentric = Vec3::Zero();
+  Index carrier_a = 0, carrier_b = 0;  // the cells of the triangle's corner and the edge's end nearest to point
+};
+
 // The narrow phase's working memory (collision.cpp).
 struct NarrowMemory {
   // Whether the narrow phase's detection found a node of one box inside the other, per
@@ -35,6 +50,11 @@ struct NarrowMemory {
   // Level 4 under the paper's response: the pairs of cells of two objects among the candidate
   // pairs of sub-boxes, (lower << 32 | higher), sorted so that each pair is answered once.
   std::vector<std::uint64_t> cell_pair_keys;  // capacity: that of the pairs
+  // The response "solver" with edge contacts: the step's deepest edge crossing per half of a
+  // pair of cells (find_crossed_edges; capacity: twice the pairs', the excess counted).
+  std::vector<EdgeCrossing> edge_crossings;
+  Index edge_crossing_count = 0;
+  Index edge_crossings_dropped = 0;
   // Levels 4 and 5 under the paper's response, and 0-3 with edge contacts: the lattice as
   // the step found it, before dynamics and responses; which side of a triangle an edge came
   // from (test_edges).
@@ -170,6 +190,14 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Coll
 // gets the same response, with the triangle's normal and the vertex's distance as n and r.
 template <bool kFriction>
 void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth);
+
+// The edge contacts as the response "solver" takes them: the deepest edge crossing of each
+// half of each pair of cells of two objects (levels 0-3: those whose triangles' bounds meet;
+// level 4: of the paired sub-boxes), as the lattice is now, into NarrowMemory::edge_crossings,
+// in cell-pair order. Replaces the broad phase's pairs at levels 0-3. Reads the State;
+// refreshes the surface caches.
+void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+                        StageCounters& counters);
 
 // Static planes: the deepest of a box's tested nodes (level 5: of its cell's surface
 // vertices) below a plane moves the cell out, whole correction on the moving side.

@@ -1,5 +1,7 @@
 #include "contact_record.h"
 
+#include <algorithm>
+
 #include "ffd/box_test.h"
 #include "ffd/trilinear.h"
 
@@ -35,6 +37,37 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
     for (int j = 0; j < 8; ++j) weight[j] += 0.25 * w[j];
   }
   return carried_by(model, boxes.box_cell[b], weight);
+}
+
+namespace {
+// Cells are kept in lattice order, z slowest, x fastest (lattice.cpp): the object's cell at
+// integer lattice coordinates `coord`, or kNoIndex.
+Index kept_cell(const Model& model, const ObjectModel& object, const Vec3i& coord) {
+  const auto lattice_order = [](const Vec3i& a, const Vec3i& b) {
+    return a.z() != b.z() ? a.z() < b.z() : a.y() != b.y() ? a.y() < b.y() : a.x() < b.x();
+  };
+  const auto begin = model.cell_coord.begin() + object.cell_begin, end = model.cell_coord.begin() + object.cell_end;
+  const auto it = std::lower_bound(begin, end, coord, lattice_order);
+  return it != end && *it == coord ? static_cast<Index>(it - model.cell_coord.begin()) : kNoIndex;
+}
+}  // namespace
+
+bool surface_point(const Model& model, Index near, const Vec3& rest, ContactSide& side) {
+  const Index near_cell = model.surface_vertex_cell[near];
+  const ObjectModel& object = model.objects[model.cell_object[near_cell]];
+  // Local coordinates in near's cell (eq. 1: rest offsets divided by the cell size).
+  const Vec3 local = model.surface_vertex_local[near] + (rest - model.surface_vertex_rest[near]) / object.cell_size;
+  // A point on a cell's face may lie in either cell: near's where it can.
+  constexpr double kOnFace = 1e-9;
+  if ((local.array() >= -kOnFace).all() && (local.array() <= 1.0 + kOnFace).all()) {
+    side = cell_point(model, near_cell, local.cwiseMax(0.0).cwiseMin(1.0));
+    return true;
+  }
+  const Vec3 whole = local.array().floor();
+  const Index cell = kept_cell(model, object, model.cell_coord[near_cell] + whole.cast<int>());
+  if (cell == kNoIndex) return false;
+  side = cell_point(model, cell, local - whole);
+  return true;
 }
 
 ContactSide probe_point() {

@@ -1,6 +1,6 @@
 #pragma once
 // One contact, as every detector of the response "solver" hands it over (node-in-box at
-// levels 0-4, planes, the probe), to be appended to its constraints (contact_solver.h); the
+// levels 0-4, edge through triangle, planes, the probe), to be appended to its constraints (contact_solver.h); the
 // paper's response answers the same detections at once (eq. 8-9, paper_response.h). Its two
 // sides are points carried by lattice nodes through trilinear weights (eq. 2): side b's
 // point is to stay on the outer side, along the normal, of side a's surface.
@@ -36,6 +36,11 @@ ContactSide cell_point(const Model& model, Index cell, const Vec3& local);
 ContactSide vertex_point(const Model& model, Index v);
 // The mean of a box face's four corners: the point its plane moves with.
 ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int face);
+// The point of a surface whose rest position (its mesh's frame) is `rest`, carried by the
+// lattice cell that holds it at rest, found from surface vertex `near` of the same object
+// (eq. 1 and 2): a point on an edge or a triangle that vertex belongs to. False where no cell
+// of the object's lattice holds it.
+bool surface_point(const Model& model, Index near, const Vec3& rest, ContactSide& side);
 ContactSide probe_point();
 ContactSide static_side();  // a plane: nothing moves
 
@@ -52,6 +57,7 @@ enum class ContactKey : std::uint64_t {
   BoxNode = 1,         // a box's tested node against another box's face
   PlaneNode = 2,       // a box's tested node against a plane
   PlaneVertex = 3,     // a surface vertex against a plane (level 5)
+  SurfaceEdge = 4,     // a surface edge through another object's triangle
 };
 std::uint64_t contact_key(ContactKey kind, Accuracy accuracy, std::uint64_t a, std::uint64_t b);
 

@@ -312,6 +312,44 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   scratch.contacts_dropped += static_cast<std::uint32_t>(total[1] - scratch.contact_count);
 }
 
+// The edge contacts ([simulation] solver_edge_contacts): each half of a pair of cells of two
+// objects whose deepest edge crossing (find_crossed_edges) becomes a constraint between the
+// point of the edge and the point of the triangle where they cross, each carried by the cell
+// that holds it at rest, the edge to go back along the crossing's normal by its depth. One
+// that crossed during the step goes the skin further (Model::surface_skin), as the paper's
+// response puts it, so that it is not found crossed again the next step; one crossed already
+// goes no further than out: pushed the skin out too, a letter's edges resting crossed on a
+// plate were pushed out and fell back every step. A carried point is where the lattice maps
+// the surface's point, the crossing's where the flat triangles put it; where the two differ by
+// more than the speculative distance the constraint would push the wrong point, and the
+// crossing is left to the box contacts.
+void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
+                        StageCounters& counters, double& max_depth) {
+  const Bodies bodies{model, state, scratch};
+  find_crossed_edges(model, *level.boxes, state, scratch, counters);
+  if (scratch.edge_crossings_dropped) scratch.constraints_dropped = true;
+  const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
+  for (Index i = 0; i < scratch.edge_crossing_count; ++i) {
+    const EdgeCrossing& crossing = scratch.edge_crossings[i];
+    const std::array<Index, 3>& tri = model.surface_triangles[crossing.triangle];
+    const Vec3 on_edge = (1.0 - crossing.along) * rest(crossing.edge[0]) + crossing.along * rest(crossing.edge[1]);
+    const Vec3 on_triangle = crossing.barycentric[0] * rest(tri[0]) + crossing.barycentric[1] * rest(tri[1]) +
+                             crossing.barycentric[2] * rest(tri[2]);
+    ContactRecord r;
+    if (!surface_point(model, crossing.edge[0], on_edge, r.b) || !surface_point(model, tri[0], on_triangle, r.a)) continue;
+    if ((bodies.point(r.b) - crossing.point).norm() > kSpeculativeDistance ||
+        (bodies.point(r.a) - crossing.point).norm() > kSpeculativeDistance)
+      continue;
+    r.normal = crossing.normal;
+    r.depth = crossing.depth + (crossing.fresh ? model.surface_skin : 0.0);
+    r.key = contact_key(ContactKey::SurfaceEdge, state.params.accuracy, crossing.triangle, crossing.edge[0]);
+    ++counters.inter_contacts;
+    max_depth = std::max(max_depth, crossing.depth);
+    scratch.record_contact(crossing.point, crossing.normal, crossing.depth, ContactKind::Inter);
+    add_contact(bodies, scratch, r);
+  }
+}
+
 void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                          StageCounters& counters, double& max_depth) {
   const BoxSet& boxes = *level.boxes;

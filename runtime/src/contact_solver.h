@@ -7,6 +7,8 @@
 //   NarrowPhase   node-in-box tests on x* (the paper's eq. 3-7, read-only): each node inside,
 //                 or within kSpeculativeDistance outside, becomes a ContactConstraint
 //                 (find_box_contacts)
+//                 with edge contacts (levels 0-4), each edge of one object's surface that
+//                 crosses a triangle of another's, likewise (find_edge_contacts)
 //   Planes        each tested node below a plane or within kSpeculativeDistance above it,
 //                 likewise (find_plane_contacts)
 //   Interaction   the probe's coupling predicted, its contacts found (find_probe_contacts)
@@ -104,6 +106,8 @@ void begin_solver_step(const Model& model, State& state, StepMemory& memory);
 
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                        StageCounters& counters, double& max_depth);
+void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
+                        StageCounters& counters, double& max_depth);
 void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                          StageCounters& counters, double& max_depth);
 void find_probe_contacts(const Model& model, const BoxSet& boxes, State& state, StepMemory& memory,

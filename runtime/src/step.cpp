@@ -47,6 +47,7 @@ void size_pair_answers(StepMemory& memory) {
   memory.pair_hit.resize(pairs);
   memory.pair_contacts.resize(pairs + 1);
   memory.cell_pair_keys.resize(pairs);
+  memory.edge_crossings.resize(2 * pairs);
   if (!memory.pool || memory.pool->threads() < 2) return;
   memory.pair_wave.resize(pairs);
   memory.pair_turn.resize(pairs);
@@ -170,10 +171,12 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
   // The response "solver" needs its stage; a scene without contacts has nothing to answer.
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
-  // The exact edge contacts (BoxLevel::edges; the paper's response only) read where the step
-  // started.
+  // The exact edge contacts (BoxLevel::edges) read where the step started; under the solver
+  // at levels 0-4 where the scene asks (level 5 answers its vertex contacts at once and tests
+  // no edges).
   const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
-  if (exact_edges)
+  const bool solver_edges = level.edges && solver && !level.exact && model.settings.solver_edge_contacts;
+  if (exact_edges || solver_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
   if (scratch.pool) scratch.pool->begin_step();
@@ -225,6 +228,7 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
         double& depth = report.max_box_penetration_m;
         if (solver && !level.exact) {
           find_box_contacts(model, level, state, scratch, counters, depth);
+          if (solver_edges) find_edge_contacts(model, level, state, scratch, counters, depth);
         } else if (level.exact) {
           // The exact level answers its vertex contacts at once under either response (its
           // points lie on triangles of other cells: docs/limits.md).

@@ -23,14 +23,16 @@ using namespace ffd;
 namespace {
 
 // A random pile of two: a letter P dropped onto a 6 mm plate (seed 5), at level 2 under the
-// paper's response.
-Model letter_on_plate(bool box_overlap, bool edge_contacts = false) {
+// paper's response unless another is named.
+Model letter_on_plate(bool box_overlap, bool edge_contacts = false, ContactResponse response = ContactResponse::Paper) {
   PileOptions options;
   options.seed = 5;
   options.objects = 2;
   options.box_overlap = box_overlap;
   options.edge_contacts = edge_contacts;
-  const SceneSpec spec = parse_scene(random_pile_scene(options), "pile_5.toml", "");
+  SceneSpec spec = parse_scene(random_pile_scene(options), "pile_5.toml", "");
+  spec.settings.response = response;
+  spec.settings.solver_edge_contacts = edge_contacts;  // the solver's are asked for by name
   REQUIRE(spec.settings.box_overlap == box_overlap);
   REQUIRE(spec.settings.edge_contacts == edge_contacts);
   std::vector<std::string> log;
@@ -100,6 +102,18 @@ TEST_CASE("Box overlap: a letter dropped on a thin plate at level 2 rests crosse
 TEST_CASE("Edge contacts: a letter dropped on a thin plate at level 2 rests apart from it with them", "[box_overlap]") {
   // Without them it rests crossed through the plate (the test above).
   CHECK(crossing_at_the_end(letter_on_plate(false, true)) == 0);
+}
+
+TEST_CASE("Edge contacts: under the response solver too, the letter on the thin plate rests apart from it with them, "
+          "crossed without",
+          "[box_overlap]") {
+  // The solver takes each crossing as a constraint between the edge's point and the
+  // triangle's (contact_solver.cpp, find_edge_contacts).
+  const std::size_t without = crossing_at_the_end(letter_on_plate(false, false, ContactResponse::Solver));
+  const std::size_t with = crossing_at_the_end(letter_on_plate(false, true, ContactResponse::Solver));
+  CAPTURE(without, with);
+  CHECK(without > 10);
+  CHECK(with == 0);
 }
 
 TEST_CASE("Edge contacts: a thin plate on the floor under a letter is held by the floor, not pushed into it", "[box_overlap]") {

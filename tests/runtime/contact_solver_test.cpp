@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <utility>
 
 #include "step_memory.h"
@@ -19,10 +20,12 @@ using namespace ffd;
 
 namespace {
 
-Model probe_and_grab_scene(ContactResponse response, Accuracy accuracy = Accuracy::CentreOfMass) {
+Model probe_and_grab_scene(ContactResponse response, Accuracy accuracy = Accuracy::CentreOfMass,
+                           bool solver_edge_contacts = false) {
   SceneSpec spec = load_scene_file(FFDSIM_TEST_DATA_DIR "/scenes/probe_and_grab.toml");
   spec.settings.response = response;
   spec.settings.accuracy = accuracy;
+  spec.settings.solver_edge_contacts = solver_edge_contacts;
   return test::compile_quietly(spec);
 }
 
@@ -52,6 +55,7 @@ struct Run {
   std::vector<std::uint64_t> hashes;
   std::uint64_t allocations = 0;
   std::uint32_t most_constraints = 0;
+  Index most_edge_contacts = 0;  // edge crossings taken in one step (solver_edge_contacts)
 };
 
 Run run(const Model& model, int threads, int steps) {
@@ -73,6 +77,7 @@ Run run(const Model& model, int threads, int steps) {
     REQUIRE_FALSE(report.constraints_overflow);
     r.hashes.push_back(state_hash(state));
     r.most_constraints = std::max(r.most_constraints, report.constraints);
+    r.most_edge_contacts = std::max(r.most_edge_contacts, scratch.memory().edge_crossing_count);
   }
   r.allocations = test::allocations();
   return r;
@@ -85,17 +90,23 @@ TEST_CASE("Determinism: box, plane, probe, surface and grab contacts give the sa
           "[determinism]") {
   // Level 2: the boxes' nodes, and under the paper's response the exact edges (edge_contacts,
   // on by default); level 4: sub-boxes, and the edges under the paper's response; level 5:
-  // the exact surfaces' vertices, and their edges under the paper's response.
-  const auto [response, accuracy] = GENERATE(std::pair{ContactResponse::Solver, Accuracy::CentreOfMass},
-                                             std::pair{ContactResponse::Solver, Accuracy::SubBoxes},
-                                             std::pair{ContactResponse::Solver, Accuracy::Exact},
-                                             std::pair{ContactResponse::Paper, Accuracy::CentreOfMass},
-                                             std::pair{ContactResponse::Paper, Accuracy::SubBoxes},
-                                             std::pair{ContactResponse::Paper, Accuracy::Exact});
-  CAPTURE(response_name(response), accuracy_name(accuracy));
-  const Model model = probe_and_grab_scene(response, accuracy);
+  // the exact surfaces' vertices, and their edges under the paper's response. The solver's
+  // edge contacts at levels 2 and 4 (solver_edge_contacts).
+  using Case = std::tuple<ContactResponse, Accuracy, bool>;
+  const auto [response, accuracy, solver_edges] = GENERATE(Case{ContactResponse::Solver, Accuracy::CentreOfMass, false},
+                                                           Case{ContactResponse::Solver, Accuracy::CentreOfMass, true},
+                                                           Case{ContactResponse::Solver, Accuracy::SubBoxes, false},
+                                                           Case{ContactResponse::Solver, Accuracy::SubBoxes, true},
+                                                           Case{ContactResponse::Solver, Accuracy::Exact, false},
+                                                           Case{ContactResponse::Paper, Accuracy::CentreOfMass, false},
+                                                           Case{ContactResponse::Paper, Accuracy::SubBoxes, false},
+                                                           Case{ContactResponse::Paper, Accuracy::Exact, false});
+  CAPTURE(response_name(response), accuracy_name(accuracy), solver_edges);
+  const Model model = probe_and_grab_scene(response, accuracy, solver_edges);
   const Run one = run(model, 1, 500);
   CHECK(one.allocations == 0);
+  // The boxes' faces are two triangles each: resting and pressed, their edges cross.
+  if (solver_edges) CHECK(one.most_edge_contacts > 0);
   // The solver's list: the boxes on the floor and on each other, the probe (level 5's vertex
   // contacts are answered at once under the solver too: docs/limits.md).
   if (response == ContactResponse::Solver && accuracy != Accuracy::Exact) CHECK(one.most_constraints > 50);

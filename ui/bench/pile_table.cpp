@@ -25,10 +25,13 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
 }
 
 // A row's response as the table names it, by what differs from the defaults: "paper",
-// "paper + box_overlap", "paper without edge_contacts", "solver" (which has no edge contacts).
+// "paper + box_overlap", "paper without edge_contacts", "solver" (no edge contacts),
+// "solver + solver_edge_contacts".
 std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts) {
+  const bool paper = response == ffd::ContactResponse::Paper;
   return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "") +
-         (response == ffd::ContactResponse::Paper && !edge_contacts ? " without edge_contacts" : "");
+         (paper && !edge_contacts ? " without edge_contacts" : "") +
+         (!paper && edge_contacts ? " + solver_edge_contacts" : "");
 }
 
 }  // namespace
@@ -40,7 +43,9 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
   run.level = level;
   run.response = response;
   run.box_overlap = model.settings.box_overlap;
-  run.edge_contacts = model.settings.edge_contacts;
+  // The response's edge contacts ran (the solver's are asked for by name).
+  run.edge_contacts = model.settings.edge_contacts &&
+                      (response == ffd::ContactResponse::Paper || model.settings.solver_edge_contacts);
   run.steps = steps;
   run.sample_every = sample_every;
   ffd::State state = initial_state_at(model, level, response);

@@ -42,6 +42,9 @@ void register_piles(CLI::App& app, PilesOptions& o) {
   cmd->add_flag("--edge-contacts,!--no-edge-contacts", o.edge_contacts,
                 "Every pile with [simulation] edge_contacts = true, the default (levels 0-3: crossed surface edges sent "
                 "back, as at levels 4 and 5), or false");
+  cmd->add_flag("--solver-edge-contacts", o.solver_edge_contacts,
+                "Every pile with [simulation] solver_edge_contacts = true (the response solver's edge contacts, levels "
+                "0-4)");
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");
@@ -70,6 +73,7 @@ int run_piles_command(const PilesOptions& o) {
       pile.objects = o.objects;
       pile.box_overlap = o.box_overlap;
       pile.edge_contacts = o.edge_contacts;
+      pile.solver_edge_contacts = o.solver_edge_contacts;
       const std::string text = ffd::random_pile_scene(pile);
       const std::string origin = "pile_" + std::to_string(seed) + ".toml";
       if (!o.scenes_dir.empty()) write_file(std::filesystem::path(o.scenes_dir) / origin, text);

@@ -162,6 +162,10 @@ struct SimulationSettings {
   // false is the paper's method as published (surfaces may stay crossed): its scenes of
   // several objects keep it.
   bool edge_contacts = true;
+  // Levels 0-4 under the response "solver", with edge_contacts: each edge crossing a triangle
+  // of another object as a constraint solved with the others (contact_solver.h). Asked for by
+  // name while a box resting on another still trembles with them (docs/limits.md).
+  bool solver_edge_contacts = false;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
   // sleep_radius of one point for sleep_time falls asleep (runtime/src/sleep.h).
