@@ -243,7 +243,8 @@ TEST_CASE("objects that overlap at the start are named with the depth, by simula
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("the README's own-mesh walkthrough scene and its replay run as it says, on a 100 mm cube in millimetres", "[cli]") {
+TEST_CASE("the README's own-mesh walkthrough scene and its replay run as it says, on a 100 mm cube in millimetres",
+          "[cli][timed]") {
   std::ifstream readme(std::string(FFDSIM_SCENARIO_DIR) + "/../README.md");
   REQUIRE(readme);
   const std::string text((std::istreambuf_iterator<char>(readme)), std::istreambuf_iterator<char>());
