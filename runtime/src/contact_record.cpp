@@ -64,6 +64,9 @@ bool surface_point(const Model& model, Index near, const Vec3& rest, ContactSide
     return true;
   }
   const Vec3 whole = local.array().floor();
+  // Beyond the object's lattice (a nearly degenerate triangle's weights may put a point far
+  // out): no cell, and no integer conversion of a value an int cannot hold.
+  if (!((whole.array().abs() <= object.lattice_dims.cast<double>().array()).all())) return false;
   const Index cell = kept_cell(model, object, model.cell_coord[near_cell] + whole.cast<int>());
   if (cell == kNoIndex) return false;
   side = cell_point(model, cell, local - whole);

@@ -52,4 +52,5 @@ TEST_CASE("Contact record: a point of a surface is carried by the cell that hold
   // Outside the lattice: no cell holds it.
   ContactSide side;
   CHECK_FALSE(surface_point(model, 0, Vec3(1.0, 1.0, 1.0), side));
+  CHECK_FALSE(surface_point(model, 0, Vec3(1e300, 0.0, 0.0), side));
 }
