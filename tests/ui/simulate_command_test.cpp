@@ -262,7 +262,7 @@ TEST_CASE("the README's own-mesh walkthrough scene and its replay run as it says
   const Result r = run_ffdsim("simulate " + (dir / "my_scene.toml").string() + " --steps 2000");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
-  CHECK_THAT(r.output, Catch::Contains("lattice 15x15x15 of 0.007 m cells"));  // as step 5 says
+  CHECK_THAT(r.output, Catch::Contains("lattice 11x11x11 of 0.01 m cells"));  // as step 5 says
   CHECK_THAT(r.output, Catch::Contains("finite true"));
   CHECK(r.output.find("warning") == std::string::npos);
   // The README's replay of that scene: a live alpha / beta change and a latency assertion,
