@@ -228,7 +228,11 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
         double& depth = report.max_box_penetration_m;
         if (solver && !level.exact) {
           find_box_contacts(model, level, state, scratch, counters, depth);
-          if (solver_edges) find_edge_contacts(model, level, state, scratch, counters, depth);
+          if (solver_edges) {
+            find_edge_contacts(model, level, state, scratch, counters, depth);
+            // Its own pairs (levels 0-3) may overflow: grown between steps.
+            if (scratch.pairs_dropped) report.hash_overflow = true;
+          }
         } else if (level.exact) {
           // The exact level answers its vertex contacts at once under either response (its
           // points lie on triangles of other cells: docs/limits.md).
