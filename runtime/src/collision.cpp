@@ -1152,13 +1152,10 @@ void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& st
   for_each_edge_cell_pair(model, boxes, state, scratch, counters, [&](Index c1, Index c2) {
     for (const auto& [b, a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
       const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, b, a, surface, counters, true);
-      if (!(crossing.depth > 0.0)) continue;
-      if (count < scratch.edge_crossings.size()) scratch.edge_crossings[count] = crossing;
-      ++count;
+      if (crossing.depth > 0.0) scratch.edge_crossings[count++] = crossing;
     }
   });
-  scratch.edge_crossing_count = static_cast<Index>(std::min<std::size_t>(count, scratch.edge_crossings.size()));
-  scratch.edge_crossings_dropped = count - scratch.edge_crossing_count;
+  scratch.edge_crossing_count = count;
 }
 
 template void collide_boxes<true>(const Model&, const BoxLevel&, State&, CollisionMemory&, StageCounters&, double&);

@@ -18,7 +18,8 @@ namespace ffd {
 
 // An edge of one object's surface through a triangle of another's (level 5's edge test,
 // collision.cpp): the edge is to go back along `normal` by `depth` (m), out of the way it came
-// in if it came in during the step (`fresh`), else out of the face it crosses.
+// in if it came in during the step (`fresh`), else out of the face it crosses (the paper's
+// response) or the least way out (the solver's).
 struct EdgeCrossing {
   double depth = 0.0;                  // m (0: no crossing)
   Vec3 normal = Vec3::Zero();          // unit, out of the triangle's side towards where the edge goes
@@ -51,12 +52,12 @@ struct NarrowMemory {
   // pairs of sub-boxes, (lower << 32 | higher), sorted so that each pair is answered once.
   std::vector<std::uint64_t> cell_pair_keys;  // capacity: that of the pairs
   // The response "solver" with edge contacts: the step's deepest edge crossing per half of a
-  // pair of cells (find_crossed_edges; capacity: twice the pairs', the excess counted).
+  // pair of cells (find_crossed_edges; capacity: twice the pairs', one per half of each pair
+  // of cells, which are at most as many as the pairs).
   std::vector<EdgeCrossing> edge_crossings;
   Index edge_crossing_count = 0;
-  Index edge_crossings_dropped = 0;
-  // Levels 4 and 5 under the paper's response, and 0-3 with edge contacts: the lattice as
-  // the step found it, before dynamics and responses; which side of a triangle an edge came
+  // Wherever edges are tested (levels 4 and 5 under the paper's response, 0-3 with edge
+  // contacts, 0-4 with the solver's): the lattice as the step found it, before dynamics and responses; which side of a triangle an edge came
   // from (test_edges).
   std::vector<Vec3> x_start;
   // Levels 0-3 with edge contacts, where the planes answer first: a cell resting on a plane

@@ -318,8 +318,8 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
 // that holds it at rest, the edge to go back along the crossing's normal by its depth. One
 // that crossed during the step goes the skin further (Model::surface_skin), as the paper's
 // response puts it, so that it is not found crossed again the next step; one crossed already
-// goes no further than out: pushed the skin out too, a letter's edges resting crossed on a
-// plate were pushed out and fell back every step. A carried point is where the lattice maps
+// goes no further than out: with the skin for it too, the letter resting on a plate stayed
+// crossed (box_overlap_test.cpp). A carried point is where the lattice maps
 // the surface's point, the crossing's where the flat triangles put it; where the two differ by
 // more than the speculative distance the constraint would push the wrong point, and the
 // crossing is left to the box contacts.
@@ -327,7 +327,6 @@ void find_edge_contacts(const Model& model, const BoxLevel& level, State& state,
                         StageCounters& counters, double& max_depth) {
   const Bodies bodies{model, state, scratch};
   find_crossed_edges(model, *level.boxes, state, scratch, counters);
-  if (scratch.edge_crossings_dropped) scratch.constraints_dropped = true;
   const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
   for (Index i = 0; i < scratch.edge_crossing_count; ++i) {
     const EdgeCrossing& crossing = scratch.edge_crossings[i];
