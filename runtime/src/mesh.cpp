@@ -22,6 +22,12 @@ std::string plural(std::size_t count, const char* singular, const char* plural_f
   return std::to_string(count) + " " + (count == 1 ? singular : plural_form);
 }
 
+std::string short_number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
 // Positions scaled by a power of two so the largest |coordinate| is below 1: exact, and no
 // squared length or cross product of a finite input can overflow.
 std::vector<Vec3> unit_scaled_positions(const std::vector<Vec3>& vertices) {
@@ -345,23 +351,70 @@ bool is_closed_and_consistent(const SurfaceMesh& mesh) {
   return edges == reversed;
 }
 
-SurfaceMesh make_box_mesh(const Vec3& size) {
+SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions) {
   if (!is_finite(size) || size.minCoeff() <= 0.0)
     throw std::invalid_argument("make_box_mesh: every edge length must be finite and > 0");
+  if (divisions.minCoeff() < 1 || divisions.maxCoeff() > kMaxBoxDivisions)
+    throw std::invalid_argument("make_box_mesh: divisions must be in 1.." + std::to_string(kMaxBoxDivisions) +
+                                " per axis");
   const Vec3 h = 0.5 * size;
   SurfaceMesh mesh;
-  // Vertex i has x = +h when bit 0 is set, y when bit 1, z when bit 2.
-  for (int i = 0; i < 8; ++i)
-    mesh.vertices.emplace_back((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
-  mesh.triangles = {
-      {0, 4, 6}, {0, 6, 2},  // -x
-      {1, 3, 7}, {1, 7, 5},  // +x
-      {0, 1, 5}, {0, 5, 4},  // -y
-      {2, 6, 7}, {2, 7, 3},  // +y
-      {0, 2, 3}, {0, 3, 1},  // -z
-      {4, 5, 7}, {4, 7, 6},  // +z
-  };
+  // The grid points (i, j, k) on the surface, i in 0..divisions.x() along x and so on,
+  // numbered x fastest, then y, then z: undivided, vertex i has x = +h when bit 0 is set, y
+  // when bit 1, z when bit 2. Each point once, shared by the faces that meet there.
+  std::map<std::array<int, 3>, Index> point_index;
+  for (int k = 0; k <= divisions.z(); ++k)
+    for (int j = 0; j <= divisions.y(); ++j) {
+      const bool side = k == 0 || k == divisions.z() || j == 0 || j == divisions.y();
+      for (int i = 0; i <= divisions.x(); i += side || i == divisions.x() ? 1 : divisions.x()) {
+        const std::array<int, 3> g{i, j, k};
+        Vec3 p;
+        for (int a = 0; a < 3; ++a) p[a] = g[a] == divisions[a] ? h[a] : -h[a] + size[a] * g[a] / divisions[a];
+        point_index.emplace(g, static_cast<Index>(mesh.vertices.size()));
+        mesh.vertices.push_back(p);
+      }
+    }
+  mesh.triangles.reserve(4 * static_cast<std::size_t>(divisions.x() * divisions.y() + divisions.y() * divisions.z() +
+                                                      divisions.z() * divisions.x()));
+  for (int a = 0; a < 3; ++a) {
+    // The face at -h[a], then the one at +h[a], spanned by axes u and v with u x v = +e_a.
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    for (const int side : {0, divisions[a]}) {
+      for (int i = 0; i < divisions[u]; ++i)
+        for (int j = 0; j < divisions[v]; ++j) {
+          std::array<Index, 4> corner;  // (i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)
+          for (int c = 0; c < 4; ++c) {
+            std::array<int, 3> g{};
+            g[a] = side;
+            g[u] = i + (c == 1 || c == 2);
+            g[v] = j + (c >= 2);
+            corner[c] = point_index.at(g);
+          }
+          // Counter-clockwise seen from outside: u, v order on the + face, reversed on the - face.
+          if (side > 0) {
+            mesh.triangles.push_back({corner[0], corner[1], corner[2]});
+            mesh.triangles.push_back({corner[0], corner[2], corner[3]});
+          } else {
+            mesh.triangles.push_back({corner[0], corner[3], corner[2]});
+            mesh.triangles.push_back({corner[0], corner[2], corner[1]});
+          }
+        }
+    }
+  }
   return mesh;
+}
+
+Vec3i box_divisions(const Vec3& size, double cell_size) {
+  Vec3i divisions;
+  for (int a = 0; a < 3; ++a) {
+    const double squares = std::max(1.0, std::ceil(size[a] / cell_size));
+    if (!(squares <= kMaxBoxDivisions))  // also NaN
+      throw std::invalid_argument("a box edge of " + short_number(size[a]) + " m in squares of " +
+                                  short_number(cell_size) + " m needs " + short_number(squares) +
+                                  " squares, more than the limit of " + std::to_string(kMaxBoxDivisions));
+    divisions[a] = static_cast<int>(squares);
+  }
+  return divisions;
 }
 
 SurfaceMesh make_sphere_mesh(double radius, int subdivisions) {

@@ -16,6 +16,7 @@ namespace {
 using ffd::Index;
 using ffd::SurfaceMesh;
 using ffd::Vec3;
+using ffd::Vec3i;
 using Triangle = std::array<Index, 3>;
 
 ffd::MeshCleanOptions keep_all_components() {
@@ -305,7 +306,39 @@ TEST_CASE("make_box_mesh is a closed outward box", "[mesh]") {
   const auto [lo, hi] = ffd::mesh_bounds(box);
   CHECK(lo == Vec3(-0.5, -1, -1.5));
   CHECK(hi == Vec3(0.5, 1, 1.5));
+  // Vertex i has x = +h when bit 0 is set, y when bit 1, z when bit 2; two triangles a face,
+  // -x, +x, -y, +y, -z, +z (the order scenes with boxes have always been built in).
+  for (int i = 0; i < 8; ++i)
+    CHECK(box.vertices[i] == Vec3((i & 1) ? 0.5 : -0.5, (i & 2) ? 1 : -1, (i & 4) ? 1.5 : -1.5));
+  const std::vector<Triangle> faces = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                                       {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+  CHECK(box.triangles == faces);
   CHECK_THROWS_AS(ffd::make_box_mesh({1, 0, 1}), std::invalid_argument);
+}
+
+TEST_CASE("make_box_mesh divides each face into squares, closed, and box_divisions sizes them to a cell", "[mesh]") {
+  const Vec3i divisions(3, 1, 5);
+  const SurfaceMesh box = ffd::make_box_mesh({0.3, 0.1, 0.5}, divisions);
+  // Faces normal to x: 1 x 5 squares, to y: 5 x 3, to z: 3 x 1; two of each, two triangles a square.
+  CHECK(box.triangles.size() == 2 * 2 * (1 * 5 + 5 * 3 + 3 * 1));
+  // Surface grid points: all (4 x 2 x 6) but the inner (2 x 0 x 4).
+  CHECK(box.vertices.size() == 4 * 2 * 6);
+  CHECK(closed_and_consistent(box));
+  CHECK(faces_point_away_from_origin(box));
+  CHECK(signed_volume(box) == Approx(0.015).epsilon(1e-12));
+  const auto [lo, hi] = ffd::mesh_bounds(box);
+  CHECK(lo == Vec3(-0.15, -0.05, -0.25));
+  CHECK(hi == Vec3(0.15, 0.05, 0.25));
+  // Every triangle a right triangle with legs 0.1 m (squares of 0.1 m on every face).
+  for (const auto& t : box.triangles) {
+    const Vec3 a = box.vertices[t[0]], b = box.vertices[t[1]], c = box.vertices[t[2]];
+    CHECK((b - a).cross(c - a).norm() == Approx(0.01).epsilon(1e-9));
+  }
+
+  CHECK(ffd::box_divisions({0.3, 0.1, 0.5}, 0.1) == Vec3i(3, 1, 5));
+  CHECK(ffd::box_divisions({0.31, 0.01, 0.5}, 0.1) == Vec3i(4, 1, 5));  // rounded up, at least 1
+  CHECK_THROWS_AS(ffd::box_divisions({1, 1, 1}, 1e-9), std::invalid_argument);  // 1e9 squares an edge
+  CHECK_THROWS_AS(ffd::make_box_mesh({1, 1, 1}, Vec3i(1, 0, 1)), std::invalid_argument);
 }
 
 TEST_CASE("make_sphere_mesh is a closed outward icosphere", "[mesh]") {

@@ -60,7 +60,14 @@ bool is_closed_and_consistent(const SurfaceMesh& mesh);
 SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels);
 
 // Built-in shapes, centred at the origin, outward-facing.
-SurfaceMesh make_box_mesh(const Vec3& size);                 // size: full edge lengths, m
+// Box: `size` full edge lengths (m); each face a grid of divisions[a] x divisions[b] squares
+// along its axes a, b (1..kMaxBoxDivisions), two triangles each. A face bends with the
+// lattice only through its vertices: box_divisions gives squares about a cell across.
+inline constexpr int kMaxBoxDivisions = 4096;
+SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions = Vec3i::Ones());
+// The divisions for faces of squares about `cell_size` across: ceil(size / cell_size) per
+// axis, at least 1. Throws std::invalid_argument past kMaxBoxDivisions on an axis.
+Vec3i box_divisions(const Vec3& size, double cell_size);
 SurfaceMesh make_sphere_mesh(double radius, int subdivisions);  // icosphere, 0..6 subdivisions
 // Surfaces of revolution about the y axis, `segments` (8..1024) around it; the profiles are
 // sampled about as finely as the circumference, so the triangles are near-equilateral.
