@@ -24,6 +24,7 @@ TEST_CASE("Contact record: a point of a surface is carried by the cell that hold
   // from the state is the point itself.
   SceneSpec spec;
   spec.objects.push_back(test::box_object("box", Vec3(0.1, 0.1, 0.1), 0.025, Vec3::Zero()));
+  spec.objects.back().mesh = make_box_mesh(Vec3(0.1, 0.1, 0.1));  // undivided
   const Model model = test::compile_quietly(spec);
   const State state = initial_state(model);
   const std::vector<Vec3>& rest = model.surface_vertex_rest;
