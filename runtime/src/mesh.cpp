@@ -365,8 +365,9 @@ SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions) {
   std::map<std::array<int, 3>, Index> point_index;
   for (int k = 0; k <= divisions.z(); ++k)
     for (int j = 0; j <= divisions.y(); ++j) {
+      // A row on a side face has every point; a row through the inside only its two ends.
       const bool side = k == 0 || k == divisions.z() || j == 0 || j == divisions.y();
-      for (int i = 0; i <= divisions.x(); i += side || i == divisions.x() ? 1 : divisions.x()) {
+      for (int i = 0; i <= divisions.x(); i += side ? 1 : divisions.x()) {
         const std::array<int, 3> g{i, j, k};
         Vec3 p;
         for (int a = 0; a < 3; ++a) p[a] = g[a] == divisions[a] ? h[a] : -h[a] + size[a] * g[a] / divisions[a];
@@ -405,14 +406,16 @@ SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions) {
 }
 
 Vec3i box_divisions(const Vec3& size, double cell_size) {
+  if (!is_finite(size) || size.minCoeff() <= 0.0 || !std::isfinite(cell_size) || cell_size <= 0.0)
+    throw std::invalid_argument("box_divisions: the edge lengths and the cell size must be finite and > 0");
   Vec3i divisions;
   for (int a = 0; a < 3; ++a) {
-    const double squares = std::max(1.0, std::ceil(size[a] / cell_size));
-    if (!(squares <= kMaxBoxDivisions))  // also NaN
+    const double squares = std::ceil(size[a] / cell_size);  // >= 1: both are > 0
+    if (!(squares <= kMaxBoxDivisions))
       throw std::invalid_argument("a box edge of " + short_number(size[a]) + " m in squares of " +
                                   short_number(cell_size) + " m needs " + short_number(squares) +
                                   " squares, more than the limit of " + std::to_string(kMaxBoxDivisions));
-    divisions[a] = static_cast<int>(squares);
+    divisions[a] = std::max(1, static_cast<int>(squares));
   }
   return divisions;
 }

@@ -338,6 +338,9 @@ TEST_CASE("make_box_mesh divides each face into squares, closed, and box_divisio
   CHECK(ffd::box_divisions({0.3, 0.1, 0.5}, 0.1) == Vec3i(3, 1, 5));
   CHECK(ffd::box_divisions({0.31, 0.01, 0.5}, 0.1) == Vec3i(4, 1, 5));  // rounded up, at least 1
   CHECK_THROWS_AS(ffd::box_divisions({1, 1, 1}, 1e-9), std::invalid_argument);  // 1e9 squares an edge
+  for (const double bad_cell : {0.0, -0.1, std::nan(""), std::numeric_limits<double>::infinity()})
+    CHECK_THROWS_AS(ffd::box_divisions({1, 1, 1}, bad_cell), std::invalid_argument);
+  CHECK_THROWS_AS(ffd::box_divisions({1, std::nan(""), 1}, 0.1), std::invalid_argument);
   CHECK_THROWS_AS(ffd::make_box_mesh({1, 1, 1}, Vec3i(1, 0, 1)), std::invalid_argument);
 }
 

@@ -66,7 +66,8 @@ SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels);
 inline constexpr int kMaxBoxDivisions = 4096;
 SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions = Vec3i::Ones());
 // The divisions for faces of squares about `cell_size` across: ceil(size / cell_size) per
-// axis, at least 1. Throws std::invalid_argument past kMaxBoxDivisions on an axis.
+// axis, at least 1. Throws std::invalid_argument for a size or cell size not finite and > 0,
+// or past kMaxBoxDivisions on an axis.
 Vec3i box_divisions(const Vec3& size, double cell_size);
 SurfaceMesh make_sphere_mesh(double radius, int subdivisions);  // icosphere, 0..6 subdivisions
 // Surfaces of revolution about the y axis, `segments` (8..1024) around it; the profiles are
