@@ -391,13 +391,18 @@ SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions) {
             g[v] = j + (c >= 2);
             corner[c] = point_index.at(g);
           }
+          // The squares' diagonals alternate as a chessboard's colours do (corners 0-2 on the
+          // square at (0, 0), 1-3 on its neighbours): with every diagonal one way, the faces of
+          // a crushed box fold alike along them and stay crossed (hard case probe_force).
+          const int d = (i + j) % 2;
+          const Index p = corner[d], q = corner[d + 1], r = corner[d + 2], s = corner[(d + 3) % 4];
           // Counter-clockwise seen from outside: u, v order on the + face, reversed on the - face.
           if (side > 0) {
-            mesh.triangles.push_back({corner[0], corner[1], corner[2]});
-            mesh.triangles.push_back({corner[0], corner[2], corner[3]});
+            mesh.triangles.push_back({p, q, r});
+            mesh.triangles.push_back({p, r, s});
           } else {
-            mesh.triangles.push_back({corner[0], corner[3], corner[2]});
-            mesh.triangles.push_back({corner[0], corner[2], corner[1]});
+            mesh.triangles.push_back({p, s, r});
+            mesh.triangles.push_back({p, r, q});
           }
         }
     }

@@ -334,6 +334,19 @@ TEST_CASE("make_box_mesh divides each face into squares, closed, and box_divisio
     const Vec3 a = box.vertices[t[0]], b = box.vertices[t[1]], c = box.vertices[t[2]];
     CHECK((b - a).cross(c - a).norm() == Approx(0.01).epsilon(1e-9));
   }
+  // The squares' diagonals alternate as a chessboard's colours: on the top face's 5 x 3
+  // squares, 8 run along +x+z (the one at the -x -z corner among them) and 7 along +x-z.
+  int along_plus = 0, along_minus = 0;
+  for (const auto& t : box.triangles) {
+    if (box.vertices[t[0]].y() != 0.05 || box.vertices[t[1]].y() != 0.05 || box.vertices[t[2]].y() != 0.05) continue;
+    for (int e = 0; e < 3; ++e) {
+      const Vec3 edge = box.vertices[t[(e + 1) % 3]] - box.vertices[t[e]];
+      if (edge.x() == 0.0 || edge.z() == 0.0) continue;  // a leg, not the diagonal
+      ++(edge.x() * edge.z() > 0.0 ? along_plus : along_minus);
+    }
+  }
+  CHECK(along_plus == 2 * 8);  // each diagonal is an edge of its square's two triangles
+  CHECK(along_minus == 2 * 7);
 
   CHECK(ffd::box_divisions({0.3, 0.1, 0.5}, 0.1) == Vec3i(3, 1, 5));
   CHECK(ffd::box_divisions({0.31, 0.01, 0.5}, 0.1) == Vec3i(4, 1, 5));  // rounded up, at least 1

@@ -61,7 +61,8 @@ SurfaceMesh subdivide_mesh(const SurfaceMesh& mesh, int levels);
 
 // Built-in shapes, centred at the origin, outward-facing.
 // Box: `size` full edge lengths (m); each face a grid of divisions[a] x divisions[b] squares
-// along its axes a, b (1..kMaxBoxDivisions), two triangles each. A face bends with the
+// along its axes a, b (1..kMaxBoxDivisions), two triangles each, the squares' diagonals
+// alternating as a chessboard's colours (no direction preferred). A face bends with the
 // lattice only through its vertices: box_divisions gives squares about a cell across.
 inline constexpr int kMaxBoxDivisions = 4096;
 SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions = Vec3i::Ones());
