@@ -276,15 +276,16 @@ TEST_CASE("ffdsim sweep: a failing job is written as failed with its exit code, 
           "[sweep][cli]") {
   const fs::path dir = test::fresh_temp_dir("sweep_fail");
   fs::create_directories(dir);
-  // The dropped blocks with a speed limit of 2.5 m/s: the fastest node reaches 1.96 m/s at
-  // alpha 0.6, beta 0 and 2.94 m/s at alpha 0.2, beta 1 (their rebound).
+  // The dropped blocks, the upper one asserted to rest on the lower (its centre 5-7 cm up,
+  // 6 cm at rest): at 5,000 N/m it does; springs of 1 N/m cannot hold 0.2 kg up (they would
+  // stretch 2 m under its weight), and it ends flattened, its centre about 2 cm up.
   {
-    std::string replay = test::read_text(kSweeps + "drop.toml");
-    replay.replace(replay.find("speed_max_m_s = 5.0"), 19, "speed_max_m_s = 2.5");
-    std::ofstream(dir / "drop.toml") << replay;
+    std::ofstream(dir / "drop.toml") << test::read_text(kSweeps + "drop.toml")
+                                     << "\n[[assert.position]]\nobject = \"high\"\nmin = [-0.05, 0.05, -0.05]\n"
+                                     << "max = [0.05, 0.07, 0.05]\nfrom_ms = 400\n";
     std::ofstream sweep(dir / "s.toml");
     sweep << "format = \"ffdsim-sweep\"\nversion = 1\nreplay = \"drop.toml\"\n"
-          << "[[point]]\nalpha = 0.6\nbeta = 0.0\n[[point]]\nalpha = 0.2\nbeta = 1.0\n";
+          << "[[point]]\nstiffness = 5000.0\n[[point]]\nstiffness = 1.0\n";
   }
   const std::string out = (dir / "sweep").string();
   REQUIRE(test::run_ffdsim("sweep plan " + (dir / "s.toml").string() + " --out " + out + " -q").exit_code == 0);
