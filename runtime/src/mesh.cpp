@@ -393,7 +393,8 @@ SurfaceMesh make_box_mesh(const Vec3& size, const Vec3i& divisions) {
           }
           // The squares' diagonals alternate as a chessboard's colours do (corners 0-2 on the
           // square at (0, 0), 1-3 on its neighbours): with every diagonal one way, the faces of
-          // a crushed box fold alike along them and stay crossed (hard case probe_force).
+          // a crushed box fold alike along them and stay crossed (hard case probe_force, its
+          // box in squares, under the solver).
           const int d = (i + j) % 2;
           const Index p = corner[d], q = corner[d + 1], r = corner[d + 2], s = corner[(d + 3) % 4];
           // Counter-clockwise seen from outside: u, v order on the + face, reversed on the - face.

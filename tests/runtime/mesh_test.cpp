@@ -335,7 +335,7 @@ TEST_CASE("make_box_mesh divides each face into squares, closed, and box_divisio
     CHECK((b - a).cross(c - a).norm() == Approx(0.01).epsilon(1e-9));
   }
   // The squares' diagonals alternate as a chessboard's colours: on the top face's 5 x 3
-  // squares, 8 run along +x+z (the one at the -x -z corner among them) and 7 along +x-z.
+  // squares, 8 run along +x+z and 7 along +x-z.
   int along_plus = 0, along_minus = 0;
   for (const auto& t : box.triangles) {
     if (box.vertices[t[0]].y() != 0.05 || box.vertices[t[1]].y() != 0.05 || box.vertices[t[2]].y() != 0.05) continue;
