@@ -64,15 +64,21 @@ std::string random_pile_scene(const PileOptions& o) {
     std::string surface;
     // Thin-walled: each wall a tenth to a quarter of the object across, so the small ones are
     // thinner than a cell and the large ones a few cells thick.
+    // Each draw in a statement of its own: the order in which a function's arguments (or an
+    // overloaded operator's operands) are evaluated is unspecified, and GCC and clang differ.
+    // The order below is the one GCC took when the piles were first drawn.
     if (shape == "ring") {
-      surface = "shape = \"ring\"\nradius = " + number(0.5 * size) + "\nthickness = " +
-                number(size * draw.uniform(0.1, 0.25)) + "\nheight = " + number(size * draw.uniform(0.2, 0.6)) + "\n";
+      const double height = size * draw.uniform(0.2, 0.6);
+      const double thickness = size * draw.uniform(0.1, 0.25);
+      surface = "shape = \"ring\"\nradius = " + number(0.5 * size) + "\nthickness = " + number(thickness) +
+                "\nheight = " + number(height) + "\n";
     } else if (shape == "torus") {
       const double thickness = size * draw.uniform(0.15, 0.35);
       surface = "shape = \"torus\"\nradius = " + number(0.5 * (size - thickness)) + "\nthickness = " + number(thickness) + "\n";
     } else if (shape == "plate") {
-      surface = "shape = \"box\"\nsize = " + vec3(size, size * draw.uniform(0.5, 1.0), size * draw.uniform(0.04, 0.12)) +
-                "\nsubdivide = 3\n";
+      const double thickness = size * draw.uniform(0.04, 0.12);
+      const double width = size * draw.uniform(0.5, 1.0);
+      surface = "shape = \"box\"\nsize = " + vec3(size, width, thickness) + "\nsubdivide = 3\n";
     } else if (shape == "bowl") {
       surface = "shape = \"bowl\"\nradius = " + number(0.5 * size) + "\nthickness = " + number(size * draw.uniform(0.06, 0.15)) + "\n";
     } else {  // a capital letter about `size` high (the em square), extruded a sixth to a third of it
