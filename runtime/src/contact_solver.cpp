@@ -232,6 +232,7 @@ void pair_box_contacts(const Model& model, const BoxLevel& level, const State& s
 
 void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.constraint_count = 0;
+  scratch.edge_contact_begin = scratch.edge_contact_end = 0;
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
   predict_dynamics(model, state, scratch, scratch.pool);
@@ -327,6 +328,7 @@ void find_edge_contacts(const Model& model, const BoxLevel& level, State& state,
                         StageCounters& counters, double& max_depth) {
   const Bodies bodies{model, state, scratch};
   find_crossed_edges(model, *level.boxes, state, scratch, counters);
+  scratch.edge_contact_begin = scratch.constraint_count;
   const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
   for (Index i = 0; i < scratch.edge_crossing_count; ++i) {
     const EdgeCrossing& crossing = scratch.edge_crossings[i];
@@ -347,6 +349,7 @@ void find_edge_contacts(const Model& model, const BoxLevel& level, State& state,
     scratch.record_contact(crossing.point, crossing.normal, crossing.depth, ContactKind::Inter);
     add_contact(bodies, scratch, r);
   }
+  scratch.edge_contact_end = scratch.constraint_count;
 }
 
 void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
@@ -454,12 +457,17 @@ void project_friction(const Bodies& bodies, ContactConstraint& c, double mu) {
 enum class ContactPass {
   All,     // every contact: non-penetration, then friction
   Planes,  // the plane contacts alone, likewise: the planes have the last word
+  Edges,   // the edge contacts' non-penetration alone, after the friction passes
 };
 
 // One pass over the contact list: each contact's non-penetration (an inequality: its
-// correction lambda stays >= 0), then its friction.
+// correction lambda stays >= 0), then its friction (none in an Edges pass).
 void project_contacts(const Bodies& bodies, StepMemory& scratch, double mu, ContactPass pass) {
-  for (Index i = 0; i < scratch.constraint_count; ++i) {
+  const bool edges = pass == ContactPass::Edges;
+  if (edges) mu = 0.0;
+  const Index begin = edges ? scratch.edge_contact_begin : 0;
+  const Index end = edges ? std::min(scratch.edge_contact_end, scratch.constraint_count) : scratch.constraint_count;
+  for (Index i = begin; i < end; ++i) {
     ContactConstraint& c = scratch.constraints[i];
     if (!(c.inv_mass > 0.0)) continue;
     if (pass == ContactPass::Planes && c.a.count != 0) continue;
@@ -831,6 +839,12 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
     project_contacts(bodies, scratch, beta, ContactPass::All);  // Coulomb, mu = beta
     if (friction_passes > 0) gather_friction_contacts(scratch, beta);
     for (int pass = 0; pass < friction_passes; ++pass) project_resting_friction(bodies, scratch, beta);
+    // The edge contacts have the last word over the friction passes: a resting box contact's
+    // friction holds its points at their anchor, and where an edge's way out is oblique to
+    // the box faces the passes took back most of what the contact pass had pushed it out
+    // (a ring's edges through a letter, moved out in the contact pass, ended each solve
+    // crossed again, for seconds on end).
+    if (friction_passes > 0) project_contacts(bodies, scratch, beta, ContactPass::Edges);
     if (grabbing) project_grab(model, bodies, scratch);
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.

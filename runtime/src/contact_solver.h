@@ -63,6 +63,8 @@ struct SolverMemory {
   Index constraint_count = 0;
   std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
   std::vector<Index> friction_contacts;     // the resting contacts the friction passes revisit
+  // The edge contacts' place in the list: constraints[edge_contact_begin .. edge_contact_end).
+  Index edge_contact_begin = 0, edge_contact_end = 0;
   Index friction_contact_count = 0;
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;
