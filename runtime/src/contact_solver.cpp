@@ -841,9 +841,8 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
     for (int pass = 0; pass < friction_passes; ++pass) project_resting_friction(bodies, scratch, beta);
     // The edge contacts have the last word over the friction passes: a resting box contact's
     // friction holds its points at their anchor, and where an edge's way out is oblique to
-    // the box faces the passes took back most of what the contact pass had pushed it out
-    // (a ring's edges through a letter, moved out in the contact pass, ended each solve
-    // crossed again, for seconds on end).
+    // the box faces the passes take back most of what the contact pass pushed it out, so
+    // that the edge ends each solve crossed again.
     if (friction_passes > 0) project_contacts(bodies, scratch, beta, ContactPass::Edges);
     if (grabbing) project_grab(model, bodies, scratch);
   }
