@@ -221,6 +221,44 @@ void cell_triangle_bounds(const Model& model, const State& state, CollisionMemor
   hi = scratch.cell_triangle_max[cell];
 }
 
+// Levels 0-3's edge tests: brings cell's entry of the owned-surface cache (NarrowMemory::
+// owned_cache) up to the lattice as it is now, unless it was filled at this surface epoch.
+// The same values, in the same order, as loading them for each pair.
+void refresh_owned_surface(const Model& model, const State& state, CollisionMemory& scratch, Index cell) {
+  OwnedSurfaceCache& cache = scratch.owned_cache;
+  if (cache.stamp[cell] == scratch.surface_epoch) return;
+  Vec3 lo_all = Vec3::Constant(INFINITY), hi_all = Vec3::Constant(-INFINITY);
+  bool finite = true;
+  for (Index i = model.cell_owned_triangle_begin[cell]; i < model.cell_owned_triangle_begin[cell + 1]; ++i) {
+    const std::array<Index, 3>& tri = model.surface_triangles[model.cell_owned_triangles[i]];
+    Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
+    for (int k = 0; k < 3; ++k) {
+      corner[k] = cached_vertex(model, state, scratch, tri[k]);
+      finite = finite && is_finite(corner[k]);
+    }
+    cache.triangle_min[i] = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]);
+    cache.triangle_max[i] = corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
+    lo_all = lo_all.cwiseMin(cache.triangle_min[i]);
+    hi_all = hi_all.cwiseMax(cache.triangle_max[i]);
+  }
+  cache.triangles_lo[cell] = lo_all;
+  cache.triangles_hi[cell] = hi_all;
+  cache.finite[cell] = finite ? 1 : 0;
+  lo_all = Vec3::Constant(INFINITY);
+  hi_all = Vec3::Constant(-INFINITY);
+  for (Index e = model.cell_owned_edge_begin[cell]; e < model.cell_owned_edge_begin[cell + 1]; ++e) {
+    const Vec3& p = cached_vertex(model, state, scratch, model.cell_owned_edges[e][0]);
+    const Vec3& q = cached_vertex(model, state, scratch, model.cell_owned_edges[e][1]);
+    lo_all = lo_all.cwiseMin(p).cwiseMin(q);
+    hi_all = hi_all.cwiseMax(p).cwiseMax(q);
+    cache.edge_min[e] = p.cwiseMin(q);
+    cache.edge_max[e] = p.cwiseMax(q);
+  }
+  cache.edges_lo[cell] = lo_all;
+  cache.edges_hi[cell] = hi_all;
+  cache.stamp[cell] = scratch.surface_epoch;
+}
+
 // Within one object: vertex v lies within the contact radius of triangle `tri` in the rest
 // shape. Such a pair is one piece of surface, not two that met: a vertex beside a coplanar
 // triangle, or across a wall thinner than the radius, reads as a little behind it as the
@@ -605,23 +643,30 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // triangles): only where it meets cell_a's can an edge cross a triangle.
   Vec3 reach_lo, reach_hi, edges_lo, edges_hi;
   bool corners_finite = true;
+  // cell_a's triangles (corners, AABBs) and cell_b's edges' AABBs: levels 0-3's owned
+  // surfaces from the per-cell cache, level 4's crossing triangles loaded for this pair.
+  const Vec3* corners = scratch.triangle_corners.data();
+  const Vec3* triangle_min = scratch.triangle_min.data();
+  const Vec3* triangle_max = scratch.triangle_max.data();
+  const Vec3* edge_min = nullptr;
+  const Vec3* edge_max = nullptr;
   if (surface.crossing) {
     cell_triangle_bounds(model, state, scratch, cell_a, reach_lo, reach_hi);
     cell_triangle_bounds(model, state, scratch, cell_b, edges_lo, edges_hi);
   } else {
-    corners_finite = load_triangles(model, state, scratch, cell_a, surface);
-    reach_lo = edges_lo = Vec3::Constant(INFINITY);
-    reach_hi = edges_hi = Vec3::Constant(-INFINITY);
-    for (Index t = 0; t < tri_count; ++t) {
-      reach_lo = reach_lo.cwiseMin(scratch.triangle_min[t]);
-      reach_hi = reach_hi.cwiseMax(scratch.triangle_max[t]);
-    }
-    for (Index e = edge_begin; e < edge_end; ++e)
-      for (Index v : surface.edges[e]) {
-        const Vec3& p = cached_vertex(model, state, scratch, v);
-        edges_lo = edges_lo.cwiseMin(p);
-        edges_hi = edges_hi.cwiseMax(p);
-      }
+    const OwnedSurfaceCache& cache = scratch.owned_cache;
+    refresh_owned_surface(model, state, scratch, cell_a);
+    refresh_owned_surface(model, state, scratch, cell_b);
+    corners_finite = cache.finite[cell_a] != 0;
+    corners = cache.corners.data() + 3 * std::size_t{tri_begin};
+    triangle_min = cache.triangle_min.data() + tri_begin;
+    triangle_max = cache.triangle_max.data() + tri_begin;
+    edge_min = cache.edge_min.data() + edge_begin;
+    edge_max = cache.edge_max.data() + edge_begin;
+    reach_lo = cache.triangles_lo[cell_a];
+    reach_hi = cache.triangles_hi[cell_a];
+    edges_lo = cache.edges_lo[cell_b];
+    edges_hi = cache.edges_hi[cell_b];
   }
   reach_lo = reach_lo.cwiseMax(edges_lo);
   reach_hi = reach_hi.cwiseMin(edges_hi);
@@ -629,26 +674,34 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // cell_a's triangles that reach into that region (all of them with a NaN about).
   if (surface.crossing) corners_finite = load_triangles(model, state, scratch, cell_a, surface);
   const bool finite = corners_finite && is_finite(reach_lo) && is_finite(reach_hi);
-  const Vec3* corners = scratch.triangle_corners.data();
   Index* __restrict near = scratch.triangle_near.data();
   Index candidates = 0;
   for (Index t = 0; t < tri_count; ++t) {
     near[candidates] = t;
-    candidates += static_cast<Index>(!finite || !((scratch.triangle_max[t].array() < reach_lo.array()).any() ||
-                                                  (scratch.triangle_min[t].array() > reach_hi.array()).any()));
+    candidates += static_cast<Index>(!finite || !((triangle_max[t].array() < reach_lo.array()).any() ||
+                                                  (triangle_min[t].array() > reach_hi.array()).any()));
   }
   if (candidates == 0) return deepest;
   for (Index e = edge_begin; e < edge_end; ++e) {
     const std::array<Index, 2>& edge = surface.edges[e];
-    const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
-    const Vec3 q = cached_vertex(model, state, scratch, edge[1]);
-    const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
+    Vec3 lo, hi;
+    if (edge_min) {
+      lo = edge_min[e - edge_begin];
+      hi = edge_max[e - edge_begin];
+    } else {
+      const Vec3& p = cached_vertex(model, state, scratch, edge[0]);
+      const Vec3& q = cached_vertex(model, state, scratch, edge[1]);
+      lo = p.cwiseMin(q);
+      hi = p.cwiseMax(q);
+    }
     // (A NaN compares false both ways: such an edge is tested, and crosses nothing.)
     if ((hi.array() < reach_lo.array()).any() || (lo.array() > reach_hi.array()).any()) continue;
+    const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
+    const Vec3 q = cached_vertex(model, state, scratch, edge[1]);
     counters.node_tests += candidates;
     for (Index c = 0; c < candidates; ++c) {
       const Index t = near[c];
-      if ((hi.array() < scratch.triangle_min[t].array()).any() || (lo.array() > scratch.triangle_max[t].array()).any())
+      if ((hi.array() < triangle_min[t].array()).any() || (lo.array() > triangle_max[t].array()).any())
         continue;
       const Index triangle = surface.triangles[tri_begin + t];
       const std::array<Index, 3>& tri = model.surface_triangles[triangle];

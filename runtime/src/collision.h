@@ -32,6 +32,21 @@ struct EdgeCrossing {
   Index carrier_a = 0, carrier_b = 0;  // the cells of the triangle's corner and the edge's end nearest to point
 };
 
+// Levels 0-3's edge tests: per cell, its owned triangles' corners and AABBs and its owned
+// edges' AABBs (Model::cell_owned_triangles and cell_owned_edges order), with the AABBs of
+// all of them, as the lattice was at surface epoch `stamp` (every response advances it). A
+// cell meets many others in a step, and reloading its surface for every pair was most of
+// the edge tests' work.
+struct OwnedSurfaceCache {
+  std::vector<Vec3> corners;                     // 3 per owned triangle
+  std::vector<Vec3> triangle_min, triangle_max;  // per owned triangle
+  std::vector<Vec3> edge_min, edge_max;          // per owned edge
+  std::vector<Vec3> triangles_lo, triangles_hi;  // (C)
+  std::vector<Vec3> edges_lo, edges_hi;          // (C)
+  std::vector<std::uint8_t> finite;              // (C) every corner finite
+  std::vector<std::uint64_t> stamp;              // (C) 0: never filled
+};
+
 // The narrow phase's working memory (collision.cpp).
 struct NarrowMemory {
   // Whether the narrow phase's detection found a node of one box inside the other, per
@@ -85,6 +100,7 @@ struct NarrowMemory {
   std::vector<Vec3> triangle_min, triangle_max;
   std::array<std::vector<double>, 3> triangle_lo, triangle_hi;
   std::vector<Index> triangle_near;  // the triangles one vertex may lie within the contact radius of
+  OwnedSurfaceCache owned_cache;
   // A thread's share of the narrow phase's answers while pairs are answered in waves: its
   // counters, and the contacts it found with the smallest keys (pair index, then order within
   // the pair), at most ContactLog::contacts.size() of them in a max-heap on the key. The

@@ -81,6 +81,16 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
     s.triangle_hi[k].resize(most_triangles);
   }
   s.triangle_near.resize(most_triangles);
+  OwnedSurfaceCache& owned = s.owned_cache;
+  owned.corners.resize(3 * model.cell_owned_triangles.size());
+  owned.triangle_min.resize(model.cell_owned_triangles.size());
+  owned.triangle_max.resize(model.cell_owned_triangles.size());
+  owned.edge_min.resize(model.cell_owned_edges.size());
+  owned.edge_max.resize(model.cell_owned_edges.size());
+  for (std::vector<Vec3>* v : {&owned.triangles_lo, &owned.triangles_hi, &owned.edges_lo, &owned.edges_hi})
+    v->resize(model.cell_count());
+  owned.finite.assign(model.cell_count(), 0);
+  owned.stamp.assign(model.cell_count(), 0);
   s.surface_x.resize(model.surface_vertex_cell.size());
   s.surface_cell_fresh.assign(model.cell_count(), 0);
   s.cell_vertex_min.resize(model.cell_count());
