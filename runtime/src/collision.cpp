@@ -221,23 +221,33 @@ void cell_triangle_bounds(const Model& model, const State& state, CollisionMemor
   hi = scratch.cell_triangle_max[cell];
 }
 
+// Triangle `tri`'s corners as the lattice is now into corner[0..3), and their AABB; false if
+// some corner is not finite.
+bool load_triangle(const Model& model, const State& state, CollisionMemory& scratch, const std::array<Index, 3>& tri,
+                   Vec3* corner, Vec3& lo, Vec3& hi) {
+  bool finite = true;
+  for (int k = 0; k < 3; ++k) {
+    corner[k] = cached_vertex(model, state, scratch, tri[k]);
+    finite = finite && is_finite(corner[k]);
+  }
+  lo = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]);
+  hi = corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
+  return finite;
+}
+
 // Levels 0-3's edge tests: brings cell's entry of the owned-surface cache (NarrowMemory::
 // owned_cache) up to the lattice as it is now, unless it was filled at this surface epoch.
 // The same values, in the same order, as loading them for each pair.
 void refresh_owned_surface(const Model& model, const State& state, CollisionMemory& scratch, Index cell) {
   OwnedSurfaceCache& cache = scratch.owned_cache;
-  if (cache.stamp[cell] == scratch.surface_epoch) return;
+  if (cache.stamp[cell] != 0 && cache.stamp[cell] == scratch.surface_epoch) return;
   Vec3 lo_all = Vec3::Constant(INFINITY), hi_all = Vec3::Constant(-INFINITY);
   bool finite = true;
   for (Index i = model.cell_owned_triangle_begin[cell]; i < model.cell_owned_triangle_begin[cell + 1]; ++i) {
     const std::array<Index, 3>& tri = model.surface_triangles[model.cell_owned_triangles[i]];
-    Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
-    for (int k = 0; k < 3; ++k) {
-      corner[k] = cached_vertex(model, state, scratch, tri[k]);
-      finite = finite && is_finite(corner[k]);
-    }
-    cache.triangle_min[i] = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]);
-    cache.triangle_max[i] = corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
+    finite = load_triangle(model, state, scratch, tri, cache.corners.data() + 3 * std::size_t{i}, cache.triangle_min[i],
+                           cache.triangle_max[i]) &&
+             finite;
     lo_all = lo_all.cwiseMin(cache.triangle_min[i]);
     hi_all = hi_all.cwiseMax(cache.triangle_max[i]);
   }
@@ -389,12 +399,8 @@ bool load_triangles(const Model& model, const State& state, CollisionMemory& scr
   bool finite = true;
   for (Index t = 0; t < tri_count; ++t) {
     const std::array<Index, 3>& tri = model.surface_triangles[surface.triangles[tri_begin + t]];
-    for (int k = 0; k < 3; ++k) {
-      corners[3 * t + k] = cached_vertex(model, state, scratch, tri[k]);
-      finite = finite && is_finite(corners[3 * t + k]);
-    }
-    const Vec3 lo = corners[3 * t].cwiseMin(corners[3 * t + 1]).cwiseMin(corners[3 * t + 2]);
-    const Vec3 hi = corners[3 * t].cwiseMax(corners[3 * t + 1]).cwiseMax(corners[3 * t + 2]);
+    Vec3 lo, hi;
+    finite = load_triangle(model, state, scratch, tri, corners + 3 * t, lo, hi) && finite;
     scratch.triangle_min[t] = lo;
     scratch.triangle_max[t] = hi;
     for (int k = 0; k < 3; ++k) {
@@ -644,7 +650,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   Vec3 reach_lo, reach_hi, edges_lo, edges_hi;
   bool corners_finite = true;
   // cell_a's triangles (corners, AABBs) and cell_b's edges' AABBs: levels 0-3's owned
-  // surfaces from the per-cell cache, level 4's crossing triangles loaded for this pair.
+  // surfaces from the per-cell cache, levels 4 and 5's crossing triangles loaded for this pair.
   const Vec3* corners = scratch.triangle_corners.data();
   const Vec3* triangle_min = scratch.triangle_min.data();
   const Vec3* triangle_max = scratch.triangle_max.data();
