@@ -638,8 +638,11 @@ bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& dep
 // the pushes between a surface's own cells fed energy in.
 // `least`: an edge crossed already takes the least way out (the solver's), not the way to
 // the face's front (crossed_way_out, the paper's).
+// `triangle_near`: room for the most triangles a cell has (NarrowMemory::triangle_near, or a
+// thread's own).
 EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, CollisionMemory& scratch, Index cell_b,
-                                   Index cell_a, const CellSurface& surface, StageCounters& counters, bool least) {
+                                   Index cell_a, const CellSurface& surface, StageCounters& counters, bool least,
+                                   Index* triangle_near) {
   EdgeCrossing deepest;
   const Index tri_begin = surface.triangle_begin[cell_a], tri_end = surface.triangle_begin[cell_a + 1];
   const Index edge_begin = surface.edge_begin[cell_b], edge_end = surface.edge_begin[cell_b + 1];
@@ -680,7 +683,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // cell_a's triangles that reach into that region (all of them with a NaN about).
   if (surface.crossing) corners_finite = load_triangles(model, state, scratch, cell_a, surface);
   const bool finite = corners_finite && is_finite(reach_lo) && is_finite(reach_hi);
-  Index* __restrict near = scratch.triangle_near.data();
+  Index* __restrict near = triangle_near;
   Index candidates = 0;
   for (Index t = 0; t < tri_count; ++t) {
     near[candidates] = t;
@@ -777,7 +780,8 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
 template <bool kFriction>
 void test_edges(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a,
                 const CellSurface& surface, StageCounters& counters, double& max_depth) {
-  const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, cell_b, cell_a, surface, counters, false);
+  const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, cell_b, cell_a, surface, counters, false,
+                                                       scratch.triangle_near.data());
   if (!(crossing.depth > 0.0)) return;
   ++counters.inter_contacts;
   max_depth = std::max(max_depth, crossing.depth);
@@ -841,11 +845,10 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
 
 // The pairs of cells of two objects the edge tests take, each once and in cell order, both
 // awake or one of them: at level 4 the cells of the sub-boxes the broad phase paired, at
-// levels 0-3 the cells whose triangles' bounds meet (pair_cells_by_triangles). on_pair(c1, c2)
-// for each.
-template <class OnPair>
-void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
-                             StageCounters& counters, const OnPair& on_pair) {
+// levels 0-3 the cells whose triangles' bounds meet (pair_cells_by_triangles). Into
+// NarrowMemory::cell_pair_keys as (lower << 32 | higher); returns how many.
+Index find_edge_cell_pairs(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+                           StageCounters& counters) {
   begin_surface_tests(scratch);
   if (&boxes != &model.sub_boxes) pair_cells_by_triangles(model, boxes, state, scratch, counters);
   std::uint64_t* keys = scratch.cell_pair_keys.data();
@@ -853,13 +856,25 @@ void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const Stat
   for (Index p = 0; p < scratch.pair_count; ++p) {
     const Index c1 = boxes.box_cell[scratch.pairs[p].a], c2 = boxes.box_cell[scratch.pairs[p].b];
     if (model.cell_object[c1] == model.cell_object[c2]) continue;
+    if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
     keys[count++] = static_cast<std::uint64_t>(std::min(c1, c2)) << 32 | std::max(c1, c2);
   }
   std::sort(keys, keys + count);
-  count = static_cast<Index>(std::unique(keys, keys + count) - keys);
+  return static_cast<Index>(std::unique(keys, keys + count) - keys);
+}
+
+std::pair<Index, Index> edge_cell_pair(const CollisionMemory& scratch, Index k) {
+  const std::uint64_t key = scratch.cell_pair_keys[k];
+  return {static_cast<Index>(key >> 32), static_cast<Index>(key & 0xffffffffu)};
+}
+
+// on_pair(c1, c2) for each of find_edge_cell_pairs' pairs, in order.
+template <class OnPair>
+void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+                             StageCounters& counters, const OnPair& on_pair) {
+  const Index count = find_edge_cell_pairs(model, boxes, state, scratch, counters);
   for (Index k = 0; k < count; ++k) {
-    const auto c1 = static_cast<Index>(keys[k] >> 32), c2 = static_cast<Index>(keys[k] & 0xffffffffu);
-    if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
+    const auto [c1, c2] = edge_cell_pair(scratch, k);
     on_pair(c1, c2);
   }
 }
@@ -1204,16 +1219,50 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Col
   }
 }
 
+// Detection only (nothing moves), so at levels 0-3 the pairs spread over the pool: every cell
+// of a pair has its owned-surface cache filled first (each by one thread), a pair's two halves
+// are written to its own two slots of edge_crossings, and the crossings found are then packed
+// in pair order, the list one thread finds. Level 4's crossing triangles are loaded per pair
+// into one shared buffer: there one thread tests the pairs.
 void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
                         StageCounters& counters) {
   const CellSurface surface = edge_surface(model, boxes);
-  Index count = 0;
-  for_each_edge_cell_pair(model, boxes, state, scratch, counters, [&](Index c1, Index c2) {
-    for (const auto& [b, a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
-      const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, b, a, surface, counters, true);
-      if (crossing.depth > 0.0) scratch.edge_crossings[count++] = crossing;
+  const Index pairs = find_edge_cell_pairs(model, boxes, state, scratch, counters);
+  EdgeCrossing* crossings = scratch.edge_crossings.data();
+  const auto test_halves = [&](Index k, StageCounters& thread_counters, Index* triangle_near) {
+    const auto [c1, c2] = edge_cell_pair(scratch, k);
+    crossings[2 * k] = deepest_edge_crossing(model, state, scratch, c1, c2, surface, thread_counters, true, triangle_near);
+    crossings[2 * k + 1] =
+        deepest_edge_crossing(model, state, scratch, c2, c1, surface, thread_counters, true, triangle_near);
+  };
+  if (surface.crossing || scratch.narrow_workspaces.size() < 2) {
+    for (Index k = 0; k < pairs; ++k) test_halves(k, counters, scratch.triangle_near.data());
+  } else {
+    std::uint8_t* in_pair = scratch.edge_cell_in_pair.data();
+    for (Index k = 0; k < pairs; ++k) {
+      const auto [c1, c2] = edge_cell_pair(scratch, k);
+      in_pair[c1] = in_pair[c2] = 1;
     }
-  });
+    constexpr Index kCellsPerChunk = 64, kPairsPerChunk = 8;
+    const auto cells = static_cast<Index>(model.cell_count());
+    parallel_for(scratch.pool, (cells + kCellsPerChunk - 1) / kCellsPerChunk, [&](std::uint32_t chunk, std::uint32_t) {
+      for (Index cell = chunk * kCellsPerChunk; cell < std::min(cells, (chunk + 1) * kCellsPerChunk); ++cell)
+        if (in_pair[cell]) {
+          refresh_owned_surface(model, state, scratch, cell);
+          in_pair[cell] = 0;
+        }
+    });
+    for (NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) w.counters = StageCounters{};
+    parallel_for(scratch.pool, (pairs + kPairsPerChunk - 1) / kPairsPerChunk, [&](std::uint32_t chunk, std::uint32_t thread) {
+      NarrowMemory::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
+      for (Index k = chunk * kPairsPerChunk; k < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++k)
+        test_halves(k, w.counters, w.triangle_near.data());
+    });
+    for (const NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) counters.node_tests += w.counters.node_tests;
+  }
+  Index count = 0;
+  for (Index i = 0; i < 2 * pairs; ++i)
+    if (crossings[i].depth > 0.0) crossings[count++] = crossings[i];
   scratch.edge_crossing_count = count;
 }
 

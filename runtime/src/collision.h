@@ -71,6 +71,7 @@ struct NarrowMemory {
   // of cells, which are at most as many as the pairs).
   std::vector<EdgeCrossing> edge_crossings;
   Index edge_crossing_count = 0;
+  std::vector<std::uint8_t> edge_cell_in_pair;  // (C) find_crossed_edges: the cells whose cache it fills, cleared after
   // Wherever edges are tested (levels 4 and 5 under the paper's response, 0-3 with edge
   // contacts, 0-4 with the solver's): the lattice as the step found it, before dynamics and responses; which side of a triangle an edge came
   // from (test_edges).
@@ -118,6 +119,7 @@ struct NarrowMemory {
     std::uint32_t held = 0;      // contacts[0 .. held) used
     std::uint32_t recorded = 0;  // contacts found, held or not
     std::uint32_t merged = 0;    // contacts[0 .. merged) are in the step's list
+    std::vector<Index> triangle_near;  // the solver's edge tests over the pool (find_crossed_edges)
   };
   std::vector<NarrowWorkspace> narrow_workspaces;  // one per thread (attach_pool())
 };
