@@ -245,9 +245,9 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
   bool finite = true;
   for (Index i = model.cell_owned_triangle_begin[cell]; i < model.cell_owned_triangle_begin[cell + 1]; ++i) {
     const std::array<Index, 3>& tri = model.surface_triangles[model.cell_owned_triangles[i]];
-    finite = load_triangle(model, state, scratch, tri, cache.corners.data() + 3 * std::size_t{i}, cache.triangle_min[i],
-                           cache.triangle_max[i]) &&
-             finite;
+    Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
+    finite = load_triangle(model, state, scratch, tri, corner, cache.triangle_min[i], cache.triangle_max[i]) && finite;
+    cache.face[i] = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
     lo_all = lo_all.cwiseMin(cache.triangle_min[i]);
     hi_all = hi_all.cwiseMax(cache.triangle_max[i]);
   }
@@ -531,11 +531,16 @@ double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { retu
 // The open segment pq passes through triangle abc: its ends strictly on opposite sides of the
 // plane, and the line through them inside the triangle (edges included). A segment touching
 // the plane, or lying in it, does not count.
-bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double sp = orient(a, b, c, p), sq = orient(a, b, c, q);
+// `face`: (b - a) x (c - a), which orient(a, b, c, .) takes the dot product with, so that a
+// triangle tested against many segments has it computed once (OwnedSurfaceCache::face).
+bool segment_crosses_face(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& face) {
+  const double sp = face.dot(p - a), sq = face.dot(q - a);
   if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
   const double u = orient(p, q, a, b), v = orient(p, q, b, c), w = orient(p, q, c, a);
   return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
+}
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  return segment_crosses_face(p, q, a, b, c, (b - a).cross(c - a));
 }
 
 // How an edge pq that crosses triangle abc now, and did not at the start of the step (p0 q0,
@@ -657,6 +662,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   const Vec3* corners = scratch.triangle_corners.data();
   const Vec3* triangle_min = scratch.triangle_min.data();
   const Vec3* triangle_max = scratch.triangle_max.data();
+  const Vec3* faces = nullptr;
   const Vec3* edge_min = nullptr;
   const Vec3* edge_max = nullptr;
   if (surface.crossing) {
@@ -670,6 +676,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
     corners = cache.corners.data() + 3 * std::size_t{tri_begin};
     triangle_min = cache.triangle_min.data() + tri_begin;
     triangle_max = cache.triangle_max.data() + tri_begin;
+    faces = cache.face.data() + tri_begin;
     edge_min = cache.edge_min.data() + edge_begin;
     edge_max = cache.edge_max.data() + edge_begin;
     reach_lo = cache.triangles_lo[cell_a];
@@ -715,7 +722,9 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
       const Index triangle = surface.triangles[tri_begin + t];
       const std::array<Index, 3>& tri = model.surface_triangles[triangle];
       const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
-      if (!segment_crosses_triangle(p, q, now[2], now[3], now[4])) continue;
+      if (!(faces ? segment_crosses_face(p, q, now[2], now[3], now[4], faces[t])
+                  : segment_crosses_triangle(p, q, now[2], now[3], now[4])))
+        continue;
       const std::vector<Vec3>& x0 = scratch.x_start;
       const Vec3 start[5] = {surface_vertex(model, x0, edge[0]), surface_vertex(model, x0, edge[1]),
                              surface_vertex(model, x0, tri[0]), surface_vertex(model, x0, tri[1]),

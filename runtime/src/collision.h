@@ -40,6 +40,7 @@ struct EdgeCrossing {
 struct OwnedSurfaceCache {
   std::vector<Vec3> corners;                     // 3 per owned triangle
   std::vector<Vec3> triangle_min, triangle_max;  // per owned triangle
+  std::vector<Vec3> face;                        // per owned triangle: (b - a) x (c - a) of its corners
   std::vector<Vec3> edge_min, edge_max;          // per owned edge
   std::vector<Vec3> triangles_lo, triangles_hi;  // (C)
   std::vector<Vec3> edges_lo, edges_hi;          // (C)

@@ -86,6 +86,7 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
   owned.corners.resize(3 * model.cell_owned_triangles.size());
   owned.triangle_min.resize(model.cell_owned_triangles.size());
   owned.triangle_max.resize(model.cell_owned_triangles.size());
+  owned.face.resize(model.cell_owned_triangles.size());
   owned.edge_min.resize(model.cell_owned_edges.size());
   owned.edge_max.resize(model.cell_owned_edges.size());
   for (std::vector<Vec3>* v : {&owned.triangles_lo, &owned.triangles_hi, &owned.edges_lo, &owned.edges_hi})
