@@ -72,7 +72,9 @@ struct NarrowMemory {
   // of cells, which are at most as many as the pairs).
   std::vector<EdgeCrossing> edge_crossings;
   Index edge_crossing_count = 0;
-  std::vector<std::uint8_t> edge_cell_in_pair;  // (C) find_crossed_edges: the cells whose cache it fills, cleared after
+  // (C) find_crossed_edges over the pool: the cells of its pairs, whose owned-surface cache it
+  // fills before the pairs are tested (cleared as it goes).
+  std::vector<std::uint8_t> edge_cell_in_pair;
   // Wherever edges are tested (levels 4 and 5 under the paper's response, 0-3 with edge
   // contacts, 0-4 with the solver's): the lattice as the step found it, before dynamics and responses; which side of a triangle an edge came
   // from (test_edges).
