@@ -221,6 +221,11 @@ void cell_triangle_bounds(const Model& model, const State& state, CollisionMemor
   hi = scratch.cell_triangle_max[cell];
 }
 
+// (b - a) x (c - a): the normal of triangle abc (unnormalised, twice its area long), on the
+// side from which a, b, c turn counter-clockwise. One expression for every use, so that a
+// face computed once and kept (OwnedSurfaceCache::face) has the bits of one computed in place.
+Vec3 triangle_face(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+
 // Triangle `tri`'s corners as the lattice is now into corner[0..3), and their AABB; false if
 // some corner is not finite.
 bool load_triangle(const Model& model, const State& state, CollisionMemory& scratch, const std::array<Index, 3>& tri,
@@ -247,7 +252,7 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
     const std::array<Index, 3>& tri = model.surface_triangles[model.cell_owned_triangles[i]];
     Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
     finite = load_triangle(model, state, scratch, tri, corner, cache.triangle_min[i], cache.triangle_max[i]) && finite;
-    cache.face[i] = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+    cache.face[i] = triangle_face(corner[0], corner[1], corner[2]);
     lo_all = lo_all.cwiseMin(cache.triangle_min[i]);
     hi_all = hi_all.cwiseMax(cache.triangle_max[i]);
   }
@@ -322,7 +327,7 @@ bool behind_every_face_at(const Model& model, const State& state, CollisionMemor
     const Vec3& a = cached_vertex(model, state, scratch, t[0]);
     const Vec3& b = cached_vertex(model, state, scratch, t[1]);
     const Vec3& c = cached_vertex(model, state, scratch, t[2]);
-    const Vec3 normal = (b - a).cross(c - a);
+    const Vec3 normal = triangle_face(a, b, c);
     if (normal.squaredNorm() > 0.0 && !behind(p, closest, normal)) return false;
   }
   return true;
@@ -362,7 +367,7 @@ bool closest_around(const Model& model, const State& state, CollisionMemory& scr
       if (!(d_sq < best_sq)) continue;
       best_sq = d_sq;
       best_point = q.point;
-      best_normal = (b - a).cross(c - a);
+      best_normal = triangle_face(a, b, c);
       best_triangle = model.cell_triangles[t];
       best_feature = q.feature;
       reliable = !inverted;
@@ -486,7 +491,7 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
       if (!(d_sq < best_sq)) continue;
       best_sq = d_sq;
       best_point = q.point;
-      best_normal = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+      best_normal = triangle_face(corner[0], corner[1], corner[2]);
       best_triangle = model.cell_triangles[tri_begin + t];
       best_feature = q.feature;
     }
@@ -526,13 +531,13 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
 
 // Six times the signed volume of the tetrahedron (a, b, c, d): > 0 when d lies on the side of
 // the plane through a, b, c that (b - a) x (c - a) points to.
-double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return (b - a).cross(c - a).dot(d - a); }
+double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return triangle_face(a, b, c).dot(d - a); }
 
 // The open segment pq passes through triangle abc: its ends strictly on opposite sides of the
 // plane, and the line through them inside the triangle (edges included). A segment touching
 // the plane, or lying in it, does not count.
-// `face`: (b - a) x (c - a), which orient(a, b, c, .) takes the dot product with, so that a
-// triangle tested against many segments has it computed once (OwnedSurfaceCache::face).
+// `face`: triangle_face(a, b, c), which orient(a, b, c, .) takes the dot product with, so that
+// a triangle tested against many segments has it computed once (OwnedSurfaceCache::face).
 bool segment_crosses_face(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& face) {
   const double sp = face.dot(p - a), sq = face.dot(q - a);
   if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
@@ -540,7 +545,7 @@ bool segment_crosses_face(const Vec3& p, const Vec3& q, const Vec3& a, const Vec
   return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
 }
 bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  return segment_crosses_face(p, q, a, b, c, (b - a).cross(c - a));
+  return segment_crosses_face(p, q, a, b, c, triangle_face(a, b, c));
 }
 
 // How an edge pq that crosses triangle abc now, and did not at the start of the step (p0 q0,
@@ -558,7 +563,7 @@ bool edge_way_back(const Vec3 (&now)[5], const Vec3 (&start)[5], double reach, V
   const Vec3 &p0 = start[0], &q0 = start[1];
   const double sp = orient(start[2], start[3], start[4], p0), sq = orient(start[2], start[3], start[4], q0);
   if ((sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0)) {
-    const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+    const Vec3 face = triangle_face(now[2], now[3], now[4]);
     const double length = face.norm();
     if (!(length > 0.0)) return false;
     normal = (sp > 0.0 ? 1.0 : -1.0) / length * face;
@@ -588,7 +593,7 @@ bool edge_way_back(const Vec3 (&now)[5], const Vec3 (&start)[5], double reach, V
 // go). Not the nearest face, which for an edge past the middle of a thin part is the far one
 // and would push it through.
 bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& depth) {
-  const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+  const Vec3 face = triangle_face(now[2], now[3], now[4]);
   const double length = face.norm();
   if (!(length > 0.0)) return false;
   normal = face / length;
@@ -605,7 +610,7 @@ bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& d
 // box's side by the reach instead of down by the fraction of a millimetre it was in.
 bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& depth) {
   const Vec3 &p = now[0], &q = now[1];
-  const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+  const Vec3 face = triangle_face(now[2], now[3], now[4]);
   const double length = face.norm();
   if (!(length > 0.0)) return false;
   const Vec3 front = face / length;
@@ -747,7 +752,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
       deepest.triangle = triangle;
       // Where the edge meets the triangle's plane: that far along it, and where in the
       // triangle (its barycentric coordinates; the crossing lies inside, edges included).
-      const Vec3 face = (now[3] - now[2]).cross(now[4] - now[2]);
+      const Vec3 face = triangle_face(now[2], now[3], now[4]);
       const double hp = face.dot(p - now[2]), hq = face.dot(q - now[2]);
       deepest.along = hp != hq ? hp / (hp - hq) : 0.5;
       deepest.point = p + deepest.along * (q - p);
@@ -1262,11 +1267,13 @@ void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& st
         }
     });
     for (NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) w.counters = StageCounters{};
-    parallel_for(scratch.pool, (pairs + kPairsPerChunk - 1) / kPairsPerChunk, [&](std::uint32_t chunk, std::uint32_t thread) {
+    const Index pair_chunks = (pairs + kPairsPerChunk - 1) / kPairsPerChunk;
+    parallel_for(scratch.pool, pair_chunks, [&](std::uint32_t chunk, std::uint32_t thread) {
       NarrowMemory::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
       for (Index k = chunk * kPairsPerChunk; k < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++k)
         test_halves(k, w.counters, w.triangle_near.data());
     });
+    // (node_tests is the one counter the edge tests keep.)
     for (const NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) counters.node_tests += w.counters.node_tests;
   }
   Index count = 0;
