@@ -9,6 +9,7 @@
 #include "ffd/closest_point.h"
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
+#include "kernels/aabb_kernels.h"
 #include "kernels/box_kernels.h"
 #include "sleep.h"
 
@@ -648,11 +649,10 @@ bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& dep
 // the pushes between a surface's own cells fed energy in.
 // `least`: an edge crossed already takes the least way out (the solver's), not the way to
 // the face's front (crossed_way_out, the paper's).
-// `triangle_near`: room for the most triangles a cell has (NarrowMemory::triangle_near, or a
-// thread's own).
+// `memory`: the edge tests' working memory (NarrowMemory::edge_tests, or a thread's own).
 EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, CollisionMemory& scratch, Index cell_b,
                                    Index cell_a, const CellSurface& surface, StageCounters& counters, bool least,
-                                   Index* triangle_near) {
+                                   NarrowMemory::EdgeTestMemory& memory) {
   EdgeCrossing deepest;
   const Index tri_begin = surface.triangle_begin[cell_a], tri_end = surface.triangle_begin[cell_a + 1];
   const Index edge_begin = surface.edge_begin[cell_b], edge_end = surface.edge_begin[cell_b + 1];
@@ -695,7 +695,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // cell_a's triangles that reach into that region (all of them with a NaN about).
   if (surface.crossing) corners_finite = load_triangles(model, state, scratch, cell_a, surface);
   const bool finite = corners_finite && is_finite(reach_lo) && is_finite(reach_hi);
-  Index* __restrict near = triangle_near;
+  Index* __restrict near = memory.candidates.data();
   Index candidates = 0;
   for (Index t = 0; t < tri_count; ++t) {
     near[candidates] = t;
@@ -703,6 +703,17 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
                                                   (triangle_min[t].array() > reach_hi.array()).any()));
   }
   if (candidates == 0) return deepest;
+  // Their AABBs as columns: each edge's box filter (boxes_meeting) tests a vector of them at once.
+  for (Index c = 0; c < candidates; ++c) {
+    const Index t = near[c];
+    for (int axis = 0; axis < 3; ++axis) {
+      memory.lo[axis][c] = triangle_min[t][axis];
+      memory.hi[axis][c] = triangle_max[t][axis];
+    }
+  }
+  const BoxColumns candidate_boxes{{memory.lo[0].data(), memory.lo[1].data(), memory.lo[2].data()},
+                                   {memory.hi[0].data(), memory.hi[1].data(), memory.hi[2].data()}};
+  Index* __restrict hits = memory.hits.data();
   for (Index e = edge_begin; e < edge_end; ++e) {
     const std::array<Index, 2>& edge = surface.edges[e];
     Vec3 lo, hi;
@@ -720,10 +731,9 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
     const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
     const Vec3 q = cached_vertex(model, state, scratch, edge[1]);
     counters.node_tests += candidates;
-    for (Index c = 0; c < candidates; ++c) {
-      const Index t = near[c];
-      if ((hi.array() < triangle_min[t].array()).any() || (lo.array() > triangle_max[t].array()).any())
-        continue;
+    const Index hit_count = boxes_meeting(candidate_boxes, candidates, lo, hi, hits);
+    for (Index h = 0; h < hit_count; ++h) {
+      const Index t = near[hits[h]];
       const Index triangle = surface.triangles[tri_begin + t];
       const std::array<Index, 3>& tri = model.surface_triangles[triangle];
       const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
@@ -795,7 +805,7 @@ template <bool kFriction>
 void test_edges(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a,
                 const CellSurface& surface, StageCounters& counters, double& max_depth) {
   const EdgeCrossing crossing = deepest_edge_crossing(model, state, scratch, cell_b, cell_a, surface, counters, false,
-                                                       scratch.triangle_near.data());
+                                                       scratch.edge_tests);
   if (!(crossing.depth > 0.0)) return;
   ++counters.inter_contacts;
   max_depth = std::max(max_depth, crossing.depth);
@@ -1243,14 +1253,14 @@ void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& st
   const CellSurface surface = edge_surface(model, boxes);
   const Index pairs = find_edge_cell_pairs(model, boxes, state, scratch, counters);
   EdgeCrossing* crossings = scratch.edge_crossings.data();
-  const auto test_halves = [&](Index k, StageCounters& thread_counters, Index* triangle_near) {
+  const auto test_halves = [&](Index k, StageCounters& thread_counters, NarrowMemory::EdgeTestMemory& edge_tests) {
     const auto [c1, c2] = edge_cell_pair(scratch, k);
-    crossings[2 * k] = deepest_edge_crossing(model, state, scratch, c1, c2, surface, thread_counters, true, triangle_near);
+    crossings[2 * k] = deepest_edge_crossing(model, state, scratch, c1, c2, surface, thread_counters, true, edge_tests);
     crossings[2 * k + 1] =
-        deepest_edge_crossing(model, state, scratch, c2, c1, surface, thread_counters, true, triangle_near);
+        deepest_edge_crossing(model, state, scratch, c2, c1, surface, thread_counters, true, edge_tests);
   };
   if (surface.crossing || scratch.narrow_workspaces.size() < 2) {
-    for (Index k = 0; k < pairs; ++k) test_halves(k, counters, scratch.triangle_near.data());
+    for (Index k = 0; k < pairs; ++k) test_halves(k, counters, scratch.edge_tests);
   } else {
     std::uint8_t* in_pair = scratch.edge_cell_in_pair.data();
     for (Index k = 0; k < pairs; ++k) {
@@ -1271,7 +1281,7 @@ void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& st
     parallel_for(scratch.pool, pair_chunks, [&](std::uint32_t chunk, std::uint32_t thread) {
       NarrowMemory::NarrowWorkspace& w = scratch.narrow_workspaces[thread];
       for (Index k = chunk * kPairsPerChunk; k < std::min(pairs, (chunk + 1) * kPairsPerChunk); ++k)
-        test_halves(k, w.counters, w.triangle_near.data());
+        test_halves(k, w.counters, w.edge_tests);
     });
     // (node_tests is the one counter the edge tests keep.)
     for (const NarrowMemory::NarrowWorkspace& w : scratch.narrow_workspaces) counters.node_tests += w.counters.node_tests;

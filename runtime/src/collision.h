@@ -104,6 +104,22 @@ struct NarrowMemory {
   std::vector<Vec3> triangle_min, triangle_max;
   std::array<std::vector<double>, 3> triangle_lo, triangle_hi;
   std::vector<Index> triangle_near;  // the triangles one vertex may lie within the contact radius of
+  // One thread's working memory of the edge tests (deepest_edge_crossing), each sized for the
+  // most triangles a cell has: a cell's candidate triangles, their AABBs as columns for the
+  // box filter's SIMD kernel, and those an edge's AABB meets (indices into the candidates).
+  struct EdgeTestMemory {
+    std::vector<Index> candidates, hits;
+    std::array<std::vector<double>, 3> lo, hi;
+    void resize(std::size_t most_triangles) {
+      candidates.resize(most_triangles);
+      hits.resize(most_triangles);
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[axis].resize(most_triangles);
+        hi[axis].resize(most_triangles);
+      }
+    }
+  };
+  EdgeTestMemory edge_tests;
   OwnedSurfaceCache owned_cache;
   // A thread's share of the narrow phase's answers while pairs are answered in waves: its
   // counters, and the contacts it found with the smallest keys (pair index, then order within
@@ -122,7 +138,7 @@ struct NarrowMemory {
     std::uint32_t held = 0;      // contacts[0 .. held) used
     std::uint32_t recorded = 0;  // contacts found, held or not
     std::uint32_t merged = 0;    // contacts[0 .. merged) are in the step's list
-    std::vector<Index> triangle_near;  // the solver's edge tests over the pool (find_crossed_edges)
+    EdgeTestMemory edge_tests;  // the solver's edge tests over the pool (find_crossed_edges)
   };
   std::vector<NarrowWorkspace> narrow_workspaces;  // one per thread (attach_pool())
 };

@@ -81,6 +81,7 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
     s.triangle_hi[k].resize(most_triangles);
   }
   s.triangle_near.resize(most_triangles);
+  s.edge_tests.resize(most_triangles);
   s.edge_cell_in_pair.assign(model.cell_count(), 0);
   OwnedSurfaceCache& owned = s.owned_cache;
   owned.corners.resize(3 * model.cell_owned_triangles.size());
@@ -150,7 +151,7 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
   memory.narrow_workspaces.resize(threads);
   for (NarrowMemory::NarrowWorkspace& w : memory.narrow_workspaces) {
     w.contacts.resize(memory.contacts.size());
-    w.triangle_near.resize(memory.triangle_near.size());
+    w.edge_tests.resize(memory.triangle_near.size());
   }
   size_pair_answers(memory);
 }

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <hwy/targets.h>
 
+#include <cmath>
 #include <utility>
 
 #include "ffd/command.h"
@@ -14,8 +15,10 @@
 #include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
 #include "step_memory.h"
+#include "kernels/aabb_kernels.h"
 #include "kernels/box_kernels.h"
 #include "kernels/spring_kernels.h"
+#include "support/fp_traps.h"
 #include "support/test_scenes.h"
 
 using namespace ffd;
@@ -203,6 +206,54 @@ TEST_CASE("Determinism: the baseline SIMD target and the best one give the same 
     INFO("step " << i + 1);
     REQUIRE(baseline[i] == best[i]);
   }
+}
+
+TEST_CASE("Determinism: the edge tests' box filter finds what the scalar test finds, in order, on every SIMD target",
+          "[determinism]") {
+  // Boxes on a coarse grid, so that many touch the edge's box exactly (a shared bound meets),
+  // some with a NaN bound (separates nothing); every count up to a few vectors, tails included.
+  std::array<std::vector<double>, 3> lo, hi;
+  constexpr Index kBoxes = 41;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (Index i = 0; i < kBoxes; ++i) {
+      const double a = std::floor(4.0 * std::sin(1.7 * i + axis)), b = a + std::floor(3.0 * std::fabs(std::cos(0.9 * i * (axis + 1))));
+      lo[axis].push_back(a);
+      hi[axis].push_back(b);
+    }
+  }
+  lo[1][7] = NAN;
+  hi[2][20] = NAN;
+  const BoxColumns boxes{{lo[0].data(), lo[1].data(), lo[2].data()}, {hi[0].data(), hi[1].data(), hi[2].data()}};
+  const auto scalar = [&](Index count, const Vec3& a, const Vec3& b) {
+    std::vector<Index> hits;
+    for (Index i = 0; i < count; ++i) {
+      bool apart = false;
+      for (int axis = 0; axis < 3; ++axis) apart = apart || b[axis] < lo[axis][i] || a[axis] > hi[axis][i];
+      if (!apart) hits.push_back(i);
+    }
+    return hits;
+  };
+  const auto kernel = [&](Index count, const Vec3& a, const Vec3& b) {
+    std::vector<Index> hits(kBoxes);
+    hits.resize(boxes_meeting(boxes, count, a, b, hits.data()));
+    return hits;
+  };
+  std::size_t found = 0;
+  test::FpTrapsOff no_traps;  // a NaN compares false, as the filter relies on
+  for (const std::int64_t targets : hwy::SupportedAndGeneratedTargets()) {
+    for (Index count = 0; count <= kBoxes; ++count) {
+      for (int e = 0; e < 12; ++e) {
+        Vec3 a(std::floor(3.0 * std::sin(0.8 * e)), std::floor(3.0 * std::cos(1.1 * e)), std::floor(2.0 * std::sin(2.3 * e)));
+        Vec3 b = a + Vec3::Constant(e % 3);
+        if (e == 11) b.y() = NAN;  // an edge with a NaN end meets every box
+        const std::vector<Index> expected = scalar(count, a, b);
+        INFO("target " << hwy::TargetName(targets) << ", " << count << " boxes, edge " << e);
+        REQUIRE(with_targets(targets, [&] { return kernel(count, a, b); }) == expected);
+        found += expected.size();
+      }
+    }
+  }
+  CHECK(found > 0);  // the boxes met some edges
 }
 
 TEST_CASE("Determinism: the box kernel gives trilinear_map's bits for every node of every box", "[determinism]") {
