@@ -16,8 +16,8 @@ struct BoxColumns {
 };
 
 // Writes to `hits`, in increasing order, every i < count whose box meets [lo, hi]: on no
-// axis lies it wholly below or wholly above (a NaN bound separates nothing, so such a box
-// meets). Returns how many; `hits` has room for count.
+// axis does it lie wholly below or wholly above (a NaN bound separates nothing, so such a
+// box meets). Returns how many; `hits` has room for count.
 Index boxes_meeting(const BoxColumns& boxes, Index count, const Vec3& lo, const Vec3& hi, Index* hits);
 
 }  // namespace ffd
