@@ -78,7 +78,7 @@ std::string random_pile_scene(const PileOptions& o) {
     } else if (shape == "plate") {
       const double thickness = size * draw.uniform(0.04, 0.12);
       const double width = size * draw.uniform(0.5, 1.0);
-      surface = "shape = \"box\"\nsize = " + vec3(size, width, thickness) + "\nsubdivide = 3\n";
+      surface = "shape = \"box\"\nsize = " + vec3(size, width, thickness) + "\n";
     } else if (shape == "bowl") {
       surface = "shape = \"bowl\"\nradius = " + number(0.5 * size) + "\nthickness = " + number(size * draw.uniform(0.06, 0.15)) + "\n";
     } else {  // a capital letter about `size` high (the em square), extruded a sixth to a third of it

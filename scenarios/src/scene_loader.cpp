@@ -268,7 +268,7 @@ class SceneReader {
     // Last, because importing a mesh is the slow part: every cheap mistake is reported first.
     if (object.has("glyph") && glyph_text(object).size() != 1)
       object.fail_at("glyph", "an [[object]]'s glyph.text is one character (a [[group]] cycles through several)");
-    spec.mesh = read_surface(object, spec.source, 0);
+    spec.mesh = read_surface(object, spec.source, 0, scale, spec.cell_size);
     scale_mesh(scale, spec.mesh);
     charge(object, spec, 1);
     return spec;
@@ -329,7 +329,7 @@ class SceneReader {
     std::vector<SurfaceMesh> surfaces;
     std::vector<std::string> sources(text.size());
     for (std::size_t i = 0; i < text.size(); ++i) {
-      surfaces.push_back(read_surface(group, sources[i], i));
+      surfaces.push_back(read_surface(group, sources[i], i, scale, base.cell_size));
       scale_mesh(scale, surfaces.back());
       // Character i is used by objects i, i + len(text), ... below `count`.
       const std::size_t copies = i < count ? (count - i + text.size() - 1) / text.size() : 0;
@@ -441,7 +441,10 @@ class SceneReader {
 
   // The surface as written in the file (unscaled); `source` says where it came from.
   // `variant` picks the character of a glyph group.
-  SurfaceMesh read_surface(const TableReader& object, std::string& source, std::size_t variant) {
+  // `scale` and `cell_size` are the object's: a box's faces are divided into squares about a
+  // cell across once scaled.
+  SurfaceMesh read_surface(const TableReader& object, std::string& source, std::size_t variant, const Vec3& scale,
+                           double cell_size) {
     std::vector<std::string_view> given;
     for (std::string_view key : {"mesh", "shape", "glyph"})
       if (object.has(key)) given.push_back(key);
@@ -485,7 +488,7 @@ class SceneReader {
     const std::string needs = " (shape = \"" + source + "\" needs ";
     if (source == "box") {
       if (!object.has("size")) object.fail_missing("size", needs + "size = [x, y, z] in m)");
-      return make_box_mesh(object.vec3("size", Vec3::Zero(), kPositive));
+      return read_box(object, object.vec3("size", Vec3::Zero(), kPositive), scale, cell_size);
     }
     const double radius = object.required_number("radius", kPositive, needs + "radius in m)");
     if (source == "sphere") return make_sphere_mesh(radius, static_cast<int>(object.integer("subdivisions", 3, 0, 6)));
@@ -505,6 +508,31 @@ class SceneReader {
     } catch (const std::invalid_argument& e) {  // a profile too long for its radius
       object.fail_at("height", e.what());
     }
+  }
+
+  // A box whose faces are grids of squares about a cell across (box_divisions): a face bends
+  // with the lattice only through its vertices, and an edge contact moves the cells of the
+  // corners nearest to it, so a face of two triangles answered for the whole face at its
+  // corners. The squares are counted against the limits before any is built.
+  SurfaceMesh read_box(const TableReader& object, const Vec3& size, const Vec3& scale, double cell_size) const {
+    const Vec3 scaled = size.cwiseProduct(scale);
+    const std::string_view key = object.has("cell_size") ? "cell_size" : object.has("scale") ? "scale" : "size";
+    const auto refuse = [&](const std::string& count) {
+      object.fail_at(key, "a box of " + format_number(scaled.x()) + " x " + format_number(scaled.y()) + " x " +
+                              format_number(scaled.z()) + " m in squares of cell_size " + format_number(cell_size) +
+                              " m has " + count + " (at most " + std::to_string(kMaxBoxDivisions) +
+                              " squares an edge and " + std::to_string(limits_.object_triangles) +
+                              " triangles per object); use a larger cell_size");
+    };
+    Vec3 squares;  // per axis; the first test keeps the division below from overflowing
+    for (int a = 0; a < 3; ++a) {
+      if (!(scaled[a] / kMaxBoxDivisions <= cell_size))
+        refuse("more than " + std::to_string(kMaxBoxDivisions) + " squares an edge");
+      squares[a] = std::max(1.0, std::ceil(scaled[a] / cell_size));
+    }
+    const double triangles = 4.0 * (squares.x() * squares.y() + squares.y() * squares.z() + squares.z() * squares.x());
+    if (triangles > static_cast<double>(limits_.object_triangles)) refuse(format_number(triangles) + " triangles");
+    return make_box_mesh(size, box_divisions(scaled, cell_size));  // scaled with the others by scale_mesh
   }
 
   // An extruded letter of a font (glyph_mesh.h); meshes are made once per character.

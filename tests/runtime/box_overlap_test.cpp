@@ -145,7 +145,6 @@ offset = 0.0
 name = "plate"
 shape = "box"
 size = [0.04, 0.003, 0.037]
-subdivide = 3
 position = [0.0, 0.0016, 0.0]
 cell_size = 0.01
 mass = 0.0178

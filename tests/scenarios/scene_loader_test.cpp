@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "ffd/mesh.h"
 #include "ffd/mesh_import.h"
 #include "ffd/model.h"
 
@@ -650,7 +651,9 @@ TEST_CASE("every object of a group shares the group's description", "[scene_load
       "layout = { grid = [3, 1, 1], spacing = [1, 0, 0] }\n[group.shape_matching]\nstiffness = 0.25\n");
   REQUIRE(scene.objects.size() == 4);
   CHECK(scene.objects[0].name == "solo");  // [[object]]s first, then the groups' objects
-  const ffd::SurfaceMesh box = ffd::make_box_mesh({0.2, 0.4, 0.6});
+  // Scaled, in squares about a cell across (0.2 x 0.4 x 0.6 m in 4 cm cells).
+  const ffd::SurfaceMesh box = ffd::make_box_mesh({0.2, 0.4, 0.6}, ffd::box_divisions({0.2, 0.4, 0.6}, 0.04));
+  REQUIRE(box.triangles.size() == 4 * (5 * 10 + 10 * 15 + 15 * 5));
   for (std::size_t n = 1; n < 4; ++n) {
     const ffd::ObjectSpec& o = scene.objects[n];
     INFO(o.name);
@@ -1079,7 +1082,10 @@ TEST_CASE("subdivide refines the compiled surface 4x per level", "[scene_loader]
 
   SECTION("of the cleaned mesh and not the raw one") {
     // A box with a duplicated triangle: clean-up drops it, then the 12 left become 48.
-    ffd::SceneSpec spec = parse(scene_with_object(kBoxLines));
+    // A box in one cell, so that its faces are single squares.
+    ffd::SceneSpec spec = parse(scene_with_object(
+        "name = \"block\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncell_size = 0.1\n[object.mass_spring]\n"));
+    REQUIRE(spec.objects[0].mesh.triangles.size() == 12);
     spec.objects[0].mesh.triangles.push_back(spec.objects[0].mesh.triangles.front());
     spec.objects[0].subdivisions = 1;
     std::vector<std::string> log;
@@ -1094,6 +1100,32 @@ TEST_CASE("subdivide refines the compiled surface 4x per level", "[scene_loader]
     REQUIRE_THROWS_AS(ffd::compile(spec, log), ffd::CompileError);
     REQUIRE_THROWS_WITH(ffd::compile(spec, log), Equals("object 'block'.subdivide: must be in 0..3"));
   }
+}
+
+TEST_CASE("a box's faces are grids of squares about a cell across, counted against the limits first", "[scene_loader]") {
+  const auto box = [](const std::string& lines) {
+    return scene_with_object("name = \"a\"\nshape = \"box\"\n" + lines + "\n[object.mass_spring]\n");
+  };
+  // 10 x 5 x 20 cm in 2.5 cm cells: 4 x 2 x 8 squares, two triangles each; the grid points
+  // on the surface are shared by the faces that meet there.
+  const ffd::SceneSpec plain = parse(box("size = [0.1, 0.05, 0.2]\ncell_size = 0.025"));
+  CHECK(plain.objects[0].mesh.triangles.size() == 4 * (4 * 2 + 2 * 8 + 8 * 4));
+  CHECK(plain.objects[0].mesh.vertices.size() == 5 * 3 * 9 - 3 * 1 * 7);
+  CHECK(ffd::is_closed_and_consistent(plain.objects[0].mesh));
+  // Scaled first: twice the size, twice the squares an edge.
+  const ffd::SceneSpec scaled = parse(box("size = [0.1, 0.05, 0.2]\nscale = 2\ncell_size = 0.025"));
+  CHECK(scaled.objects[0].mesh.triangles.size() == 4 * (8 * 4 + 4 * 16 + 16 * 8));
+  // A thin box is one square thick; a cell larger than the box leaves faces of one square.
+  CHECK(parse(box("size = [0.1, 0.001, 0.1]\ncell_size = 0.025")).objects[0].mesh.triangles.size() ==
+        4 * (4 * 1 + 1 * 4 + 4 * 4));
+  CHECK(parse(box("size = [0.1, 0.1, 0.1]\ncell_size = 1.0")).objects[0].mesh.triangles.size() == 12);
+  // Too many squares is refused by the key that asks for them, before any is built.
+  REQUIRE_THROWS_WITH(parse(box("size = [0.1, 0.1, 0.1]\ncell_size = 0.00001")),
+                      Contains("inline.toml:") && Contains("object[0].cell_size: a box of 0.1 x 0.1 x 0.1 m") &&
+                          Contains("more than 4096 squares an edge"));
+  REQUIRE_THROWS_WITH(parse(box("size = [1, 1, 1]\ncell_size = 0.0005")),
+                      Contains("object[0].cell_size: a box of 1 x 1 x 1 m") &&
+                          Contains("triangles (at most 4096 squares an edge and 5000000 triangles per object)"));
 }
 
 TEST_CASE("subdivide out of range names the file and line and column and field", "[scene_loader]") {
@@ -1139,9 +1171,11 @@ TEST_CASE("scene limits turn oversized scenes into errors naming the limit", "[s
                   "inline.toml:7:13: object[0].cell_size: cell_size 0.0078125 m over a surface of 1 x 1 x 1 m "
                   "makes a lattice of up to 2146689 cells, more than the limit of 1000000 per object; use a larger "
                   "cell_size");
-    REQUIRE_THROWS_WITH(parse(box_object("[1.0, 1.0, 1.0]", "1e-300")),
-                        Contains("object[0].cell_size: cell_size 1e-300 m over a surface of 1 x 1 x 1 m makes a "
-                                 "lattice of more cells than the limit of 1000000 per object"));
+    // A sphere: a box that fine is refused for its squares first.
+    REQUIRE_THROWS_WITH(parse(scene_with_object("name = \"s\"\nshape = \"sphere\"\nradius = 0.5\ncell_size = 1e-300\n"
+                                                "[object.mass_spring]\n")),
+                        Contains("object[0].cell_size: cell_size 1e-300 m over a surface of ") &&
+                            Contains("makes a lattice of more cells than the limit of 1000000 per object"));
   }
   SECTION("lattices over the per-scene limit") {
     // 2^-6 m cells over 1 m boxes: 65^3 = 274,625 cells each, 8 of them.
@@ -1164,12 +1198,12 @@ TEST_CASE("scene limits turn oversized scenes into errors naming the limit", "[s
                   "the limit of 10000000 per scene");
   }
   SECTION("triangle-cell pairs over the per-scene limit") {
-    // 2^-3 m cells over a 1 m box: a 9^3 grid; each of the 12 triangles spans the 9 x 9 cells
-    // of its face.
+    // 2^-3 m cells over a 1 m box: a 9^3 grid; each face is 8 x 8 squares of a cell, and each of
+    // their 768 triangles' bounding boxes spans 2 x 2 cells of the grid.
     ffd::SceneLimits limits;
     limits.scene_triangle_cells = 900;
     REQUIRE_THROWS_WITH(ffd::parse_scene(box_object("[1.0, 1.0, 1.0]", "0.125"), "inline.toml", kFixtureDir, limits),
-                        Equals("inline.toml:7:13: object[0].cell_size: building the lattices means clipping 972 "
+                        Equals("inline.toml:7:13: object[0].cell_size: building the lattices means clipping 3072 "
                                "triangle-cell pairs so far (each triangle against every cell of its bounding box), "
                                "more than the limit of 900 per scene; use a larger cell_size"));
   }
