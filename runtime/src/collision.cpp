@@ -604,11 +604,12 @@ bool crossed_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& d
 
 // The shortest way out for an edge pq that crossed triangle abc (now[0..4]) before this step
 // already: to the face's front or back, by the depth of its end furthest behind, or past one
-// of the triangle's edges rs, along the common perpendicular of the two lines by their
-// distance, whichever is least (at most `reach`). The response "solver"'s: its constraints
-// move the edge by the whole depth within the step, and a face's front taken blindly pushed
-// the top face's diagonal of a box, crossed by a box resting on it, sideways out of the upper
-// box's side by the reach instead of down by the fraction of a millimetre it was in.
+// of the triangle's edges rs towards the face's front, along the common perpendicular of the
+// two lines by their distance, whichever is least (at most `reach`). The response "solver"'s:
+// its constraints move the edge by the whole depth within the step, and a face's front taken
+// blindly pushed the top face's diagonal of a box, crossed by a box resting on it, sideways
+// out of the upper box's side by the reach instead of down by the fraction of a millimetre it
+// was in.
 bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& depth) {
   const Vec3 &p = now[0], &q = now[1];
   const Vec3 face = triangle_face(now[2], now[3], now[4]);
@@ -631,8 +632,13 @@ bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& dep
     // passes rs's on the other side, outside the triangle.
     const double distance = across.dot(p - r) / across_length;
     if (!(std::abs(distance) < depth)) continue;
+    const Vec3 out = (distance > 0.0 ? -1.0 : 1.0) / across_length * across;
+    // Past an edge to the face's back is into the body: pq's line passes a box's rim
+    // outside already where it crosses the top face rising from inside, and moved past the
+    // rim it crosses the side face instead (a letter leaning on a plate's rim stayed crossed).
+    if (!(out.dot(front) > 0.0)) continue;
     depth = std::abs(distance);
-    normal = (distance > 0.0 ? -1.0 : 1.0) / across_length * across;
+    normal = out;
   }
   depth = std::min(depth, reach);
   return depth > 0.0;

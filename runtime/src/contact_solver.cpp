@@ -316,14 +316,13 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
 // The edge contacts ([simulation] solver_edge_contacts): each half of a pair of cells of two
 // objects whose deepest edge crossing (find_crossed_edges) becomes a constraint between the
 // point of the edge and the point of the triangle where they cross, each carried by the cell
-// that holds it at rest, the edge to go back along the crossing's normal by its depth. One
-// that crossed during the step goes the skin further (Model::surface_skin), as the paper's
-// response puts it, so that it is not found crossed again the next step; one crossed already
-// goes no further than out: with the skin for it too, the letter resting on a plate stayed
-// crossed (box_overlap_test.cpp). A carried point is where the lattice maps
-// the surface's point, the crossing's where the flat triangles put it; where the two differ by
-// more than the speculative distance the constraint would push the wrong point, and the
-// crossing is left to the box contacts.
+// that holds it at rest, the edge to go back along the crossing's normal by its depth and the
+// skin further (Model::surface_skin), as the paper's response puts a vertex, so that it is not
+// found crossed again the next step: moved only to the face or the edge it passes, a letter
+// leaning on a plate's rim touched it for ever (box_overlap_test.cpp). A carried point is
+// where the lattice maps the surface's point, the crossing's where the flat triangles put it;
+// where the two differ by more than the speculative distance the constraint would push the
+// wrong point, and the crossing is left to the box contacts.
 void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                         StageCounters& counters, double& max_depth) {
   const Bodies bodies{model, state, scratch};
@@ -342,7 +341,7 @@ void find_edge_contacts(const Model& model, const BoxLevel& level, State& state,
         (bodies.point(r.a) - crossing.point).norm() > kSpeculativeDistance)
       continue;
     r.normal = crossing.normal;
-    r.depth = crossing.depth + (crossing.fresh ? model.surface_skin : 0.0);
+    r.depth = crossing.depth + model.surface_skin;
     r.key = contact_key(ContactKey::SurfaceEdge, state.params.accuracy, crossing.triangle, crossing.edge[0]);
     ++counters.inter_contacts;
     max_depth = std::max(max_depth, crossing.depth);
