@@ -105,7 +105,7 @@ TEST_CASE("Determinism: box, plane, probe, surface and grab contacts give the sa
   const Model model = probe_and_grab_scene(response, accuracy, solver_edges);
   const Run one = run(model, 1, 500);
   CHECK(one.allocations == 0);
-  // The boxes' faces are two triangles each: resting and pressed, their edges cross.
+  // The boxes' faces, resting and pressed on each other, cross at their triangles' edges.
   if (solver_edges) CHECK(one.most_edge_contacts > 0);
   // The solver's list: the boxes on the floor and on each other, the probe (level 5's vertex
   // contacts are answered at once under the solver too: docs/limits.md).
