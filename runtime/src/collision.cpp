@@ -649,10 +649,9 @@ bool least_way_out(const Vec3 (&now)[5], double reach, Vec3& normal, double& dep
 // divided into triangles about a cell across, resting on each other, cross wherever either
 // bends by a fraction of a millimetre. The boxes' node contacts hold such faces apart; the
 // paper's answer to such a crossing goes no deeper than the surface skin (a hundredth of a
-// cell) a step. Answered in full, each moved a cell by up to a millimetre and bent the face
-// into the next crossing (hard case many_contacts: a slab landing on another sent nodes off
-// at 1.5 m/s); not answered at all, a ring lying on a plate stayed crossed for 140 ms (random
-// pile 7, level 2).
+// cell) a step. Answered in full, each bent the face into the next crossing and a slab
+// landing on another threw nodes off (hard case many_contacts); not answered at all, a ring
+// lying on a plate stayed crossed (random piles).
 inline constexpr double kTangentEdgeSine = 0.2;
 
 // Level 5's edge test, one half of a pair of cells of two objects: the deepest crossing of
