@@ -1,6 +1,7 @@
 #include "ffd/measure.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 
 #include "ffd/surface_metrics.h"
@@ -18,16 +19,18 @@ Energy compute_energy(const Model& model, const State& state) {
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
     const ObjectModel& o = model.objects[i];
     if (o.dynamics != DynamicsKind::MassSpring) continue;
-    // The energy of the forces the springs applied, f^2 / 2k: the same as 1/2 k (l - l0)^2
-    // where the solver converges (f = k (l - l0)), and bounded by the forces where it does not:
-    // a few sweeps leave very stiff springs stretched by a residue that 1/2 k (l - l0)^2 would
-    // read as energy the springs never push with
-    // (docs/notes/2026-11-28-code-findings.md#elastic-energy).
-    // f also holds the springs' damping force, so a
-    // spring changing length fast reads a little more than it stores: never less.
+    // A spring's stored energy, 1/2 k (l - l0)^2, but never more than that of the force it
+    // applied, f^2 / 2k. The force bounds it where a few sweeps leave very stiff springs
+    // stretched by a residue they never push with
+    // (docs/notes/2026-11-28-code-findings.md#elastic-energy); the length bounds it where the
+    // force is mostly the springs' damping, a soft object landing (f holds both).
     const double stiffness = state.params.stiffness[i];
-    for (Index s = o.spring_begin; s < o.spring_end; ++s)
-      e.elastic += 0.5 * state.spring_force[s] * state.spring_force[s] / stiffness;
+    for (Index s = o.spring_begin; s < o.spring_end; ++s) {
+      const Spring& spring = model.springs[s];
+      const double stretch_force = stiffness * ((state.x[spring.a] - state.x[spring.b]).norm() - spring.rest_length);  // N
+      const double force = std::min(std::abs(state.spring_force[s]), std::abs(stretch_force));  // N
+      e.elastic += 0.5 * force * force / stiffness;
+    }
     // Likewise the volume constraints: p^2 V0 / 2K, K (V - V0)^2 / 2 V0 where converged.
     for (Index t = o.tetrahedron_begin; t < o.tetrahedron_end; ++t)
       e.elastic += 0.5 * state.volume_pressure[t] * state.volume_pressure[t] * model.tetrahedra[t].compliance;
