@@ -75,6 +75,17 @@ struct Bodies {
   Vec3& x(Index n) const { return n == kProbeNode ? state.probe.x : state.x[n]; }
   Vec3& v(Index n) const { return n == kProbeNode ? state.probe.v : state.v[n]; }
   const Vec3& x_prev(Index n) const { return n == kProbeNode ? scratch.probe_x_prev : scratch.x_prev[n]; }
+  // Where the substep began (the step, without substeps).
+  Vec3 x_start(Index n) const {
+    if (scratch.substeps == 1) return x_prev(n);
+    if (n == kProbeNode) return scratch.probe_x_sub;
+    return Eigen::Map<const Vec3>(scratch.start_record.get() + kNodeRecord * n);
+  }
+  Vec3 point_start(const ContactSide& s) const {
+    Vec3 p = Vec3::Zero();
+    for (int j = 0; j < s.count; ++j) p += s.weight[j] * x_start(s.node[j]);
+    return p;
+  }
   double inv_mass(Index n) const {
     if (n == kProbeNode) return probe_inv_mass(model, state);
     return scratch.object_solving[model.node_object[n]] ? model.node_inv_mass[n] : 0.0;
@@ -174,6 +185,7 @@ void make_constraint(const Bodies& bodies, const ContactRecord& r, const BoxSet*
   c.approach = r.normal.dot(bodies.velocity(r.b) - bodies.velocity(r.a));
   c.inv_mass = 0.0;
   c.lambda = 0.0;
+  c.pushed = 0.0;
   c.friction = Vec3::Zero();
   c.lodged = r.depth > kLodgedDepth + std::max(0.0, -c.approach) * kRecentEntrySteps * dt;
 }
@@ -235,6 +247,11 @@ void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.edge_contact_begin = scratch.edge_contact_end = 0;
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
+  // Not at level 5: its vertex contacts are answered in the narrow phase, before the solve,
+  // and substep 0's prediction from the step's start would undo those answers.
+  const bool substeps = model.settings.solver_substeps && state.params.accuracy != Accuracy::Exact;
+  scratch.substeps = substeps ? dynamics_iterations(model) : 1;
+  scratch.substep_gravity = substeps && has(model.settings.effects, Effect::Gravity) ? state.params.gravity : Vec3::Zero();
   predict_dynamics(model, state, scratch, scratch.pool);
   scratch.grab_force = Vec3::Zero();
 }
@@ -441,11 +458,12 @@ namespace {
 // offset (its anchor, or where the step began) within the Coulomb cone |friction| <= mu lambda,
 // lambda its normal correction so far.
 void project_friction(const Bodies& bodies, ContactConstraint& c, double mu) {
-  if (!(mu > 0.0) || !(c.lambda > 0.0) || c.lodged) return;
+  const double load = c.lambda + c.pushed;  // m
+  if (!(mu > 0.0) || !(load > 0.0) || c.lodged) return;
   const Vec3 slide = (bodies.point(c.b) - bodies.point(c.a)) - c.hold;
   const Vec3 tangential = slide - c.normal.dot(slide) * c.normal;
   Vec3 friction = c.friction - tangential / c.inv_mass;
-  const double limit = mu * c.lambda, size = friction.norm();
+  const double limit = mu * load, size = friction.norm();
   if (size > limit) friction *= limit / size;
   const Vec3 delta = friction - c.friction;
   c.friction = friction;
@@ -492,7 +510,7 @@ void gather_friction_contacts(StepMemory& scratch, double mu) {
   Index count = 0;
   for (Index i = 0; i < scratch.constraint_count && mu > 0.0; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
-    if (c.inv_mass > 0.0 && c.lambda > 0.0 && !c.lodged && !(c.approach < -kRestingApproach))
+    if (c.inv_mass > 0.0 && c.lambda + c.pushed > 0.0 && !c.lodged && !(c.approach < -kRestingApproach))
       scratch.friction_contacts[count++] = i;
   }
   scratch.friction_contact_count = count;
@@ -514,10 +532,10 @@ void project_grab(const Model& model, const Bodies& bodies, StepMemory& scratch)
   bodies.prepare(side);
   const double w = bodies.weighted_inv_mass(side);
   if (!(w > 0.0)) return;
-  const double dt = model.settings.dt;
+  const double dt = model.settings.dt / scratch.substeps;  // s: the step, or the substep
   const Vec3 p = bodies.point(side);
-  const Vec3 velocity = (p - bodies.point_prev(side)) / dt;
-  const Vec3 moved = dt * grab_velocity_change(model, w, grab.target - p, velocity, scratch.grab_force);  // m
+  const Vec3 velocity = (p - bodies.point_start(side)) / dt;
+  const Vec3 moved = dt * grab_velocity_change(model, w, grab.target - p, velocity, scratch.grab_force, dt);  // m
   scratch.grab_force += moved / (w * dt * dt);
   bodies.move(side, moved / w);
 }
@@ -818,6 +836,28 @@ void keep_anchors(const Model& model, State& state, StepMemory& scratch, double 
   std::copy(begin, begin + static_cast<std::ptrdiff_t>(state.anchor_count), state.anchors.begin());
 }
 
+// Substep k of the solve (solver_substeps): the objects' and the probe's predictions over
+// h = dt / substeps from where the substep before left them; each contact's normal correction
+// so far moved to `pushed`, so that a later substep never pulls back what an earlier one
+// pushed (its multiplier restarts at 0, its load stays for friction); the grab's force
+// restarts with its own integration over h.
+void begin_solver_substep(const Model& model, int k, State& state, StepMemory& scratch) {
+  begin_substep(model, k, state, scratch, scratch.pool);
+  if (has(model.settings.effects, Effect::Probe)) {
+    const double h = model.settings.dt / scratch.substeps;  // s
+    const Vec3 u = k == 0 ? state.probe.v : Vec3((state.probe.x - scratch.probe_x_sub) / h);  // m/s
+    scratch.probe_x_sub = k == 0 ? scratch.probe_x_prev : state.probe.x;
+    state.probe.x = scratch.probe_x_sub + h * u;
+  }
+  if (k > 0)
+    for (Index i = 0; i < scratch.constraint_count; ++i) {
+      ContactConstraint& c = scratch.constraints[i];
+      c.pushed += c.lambda;
+      c.lambda = 0.0;
+    }
+  scratch.grab_force = Vec3::Zero();
+}
+
 }  // namespace
 
 void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
@@ -833,7 +873,9 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
   if (grabbing) wake(state, model.cell_object[state.grab.cell]);  // solved from the next step if asleep now
   const int iterations = dynamics_iterations(model);
   const int friction_passes = beta > 0.0 ? kFrictionPasses : 0;
+  const bool substeps = scratch.substeps > 1;
   for (int it = 0; it < iterations; ++it) {
+    if (substeps) begin_solver_substep(model, it, state, scratch);
     sweep_dynamics(model, it, state, scratch, scratch.pool);
     project_contacts(bodies, scratch, beta, ContactPass::All);  // Coulomb, mu = beta
     if (friction_passes > 0) gather_friction_contacts(scratch, beta);
@@ -849,6 +891,12 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
   // Without this pass the last contacts of a pass (the probe's) pushed a box's nodes through
   // the floor (the `probe_force` hard case).
   project_contacts(bodies, scratch, beta, ContactPass::Planes);
+  if (substeps)  // the step's whole normal correction, as the velocity pass reads it
+    for (Index i = 0; i < scratch.constraint_count; ++i) {
+      ContactConstraint& c = scratch.constraints[i];
+      c.lambda += c.pushed;
+      c.pushed = 0.0;
+    }
   keep_anchors(model, state, scratch, beta);
   finish_dynamics(model, state, scratch, scratch.pool);
   const double dt = model.settings.dt;

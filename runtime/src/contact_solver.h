@@ -49,7 +49,8 @@ struct ContactConstraint {
   std::uint8_t face = 0;         // anchor is kept in (kNoIndex: a plane's, the world's)
   double approach = 0.0;         // normal . (v_b - v_a) when found, m/s (< 0: approaching)
   double inv_mass = 0.0;         // sum of w^2 / m over both sides' free nodes, 1/kg
-  double lambda = 0.0;           // normal correction so far this step, m (>= 0)
+  double lambda = 0.0;           // normal correction so far this step (or substep), m (>= 0)
+  double pushed = 0.0;           // the step's earlier substeps' normal corrections, m
   Vec3 friction = Vec3::Zero();  // tangential correction so far this step, m
   bool lodged = false;           // found deeper than a step's approach: pushed out without friction
 };
@@ -69,6 +70,7 @@ struct SolverMemory {
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;
   Vec3 probe_x_prev = Vec3::Zero(), probe_device_velocity = Vec3::Zero();
+  Vec3 probe_x_sub = Vec3::Zero();  // the probe at the start of the substep
   Vec3 grab_force = Vec3::Zero();
   // Rolling resistance and support damping: per object, its rigid motion this step and what
   // its active contacts carry.

@@ -161,7 +161,7 @@ void project_cell_shape(const Model& model, Index cell, const Mat3& R, double al
 // The kernel's view of one object's springs at `stiffness`: XPBD's alpha~ = 1 / (k dt^2) and
 // the damping term gamma = c / (k dt).
 SpringSolve spring_solve(const Model& model, const ObjectModel& obj, double stiffness, DynamicsMemory& memory) {
-  const double dt = model.settings.dt;
+  const double dt = model.settings.dt / memory.substeps;  // s: the step, or the substep
   const double compliance = 1.0 / stiffness;            // m/N
   const double alpha_tilde = compliance / (dt * dt);    // XPBD eq. (compliance scaled by dt^2)
   const double gamma = compliance * obj.mass_spring.damping / dt;  // XPBD damping term
@@ -192,13 +192,14 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
   }
   const SpringSolve solve = spring_solve(model, obj, stiffness, memory);
   const std::size_t object = &obj - model.objects.data();
-  if (memory.denominator_stiffness[object] != stiffness) {
+  if (memory.denominator_stiffness[object] != stiffness || memory.denominator_substeps[object] != memory.substeps) {
     for (Index s = obj.spring_begin; s < obj.spring_end; ++s) {
       const Spring& spring = model.springs[s];
       const double w = model.node_inv_mass[spring.a] + model.node_inv_mass[spring.b];
       memory.spring_inv_denominator[s] = 1.0 / ((1.0 + solve.gamma) * w + solve.alpha_tilde);
     }
     memory.denominator_stiffness[object] = stiffness;
+    memory.denominator_substeps[object] = memory.substeps;
   }
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) memory.lambda[s] = 0.0;
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) memory.tetrahedron_lambda[t] = 0.0;
@@ -226,7 +227,7 @@ bool has_cell_constraints(const ObjectModel& obj) {
 // A sweep's second part, after the object's springs (sweep_springs): its volumes, then its
 // cells' shapes, one after the other (they share nodes).
 void project_cell_constraints(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
-  const double dt = model.settings.dt;
+  const double dt = model.settings.dt / memory.substeps;  // s: the step, or the substep
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
     project_volume(model, model.tetrahedra[t], 1.0 / (dt * dt), memory.tetrahedron_lambda[t], state);
   if (obj.mass_spring.shape_stiffness > 0.0) {
@@ -236,9 +237,22 @@ void project_cell_constraints(const Model& model, const ObjectModel& obj, State&
   }
 }
 
+// Node n's velocity at the end of a substep of h that began at start_record with velocity u:
+// u plus what the constraints moved it from its prediction, over h. A node no constraint moved
+// keeps u exactly (x - start over h would round it, and a free flight would gain energy).
+Vec3 substep_velocity(const DynamicsMemory& memory, Index n, double h, const Vec3& x, const Vec3& u) {
+  const Vec3 predicted = Eigen::Map<const Vec3>(memory.start_record.get() + kNodeRecord * n) + h * u;  // m
+  return u + (x - predicted) / h;
+}
+
 void finish_mass_spring(const Model& model, const ObjectModel& obj, State& state, DynamicsMemory& memory) {
-  const double inv_dt = 1.0 / model.settings.dt;
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
+  const double inv_dt = memory.substeps / model.settings.dt;  // 1/s: of the step, or the last substep
+  if (memory.substeps == 1) {
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = (state.x[n] - memory.x_prev[n]) * inv_dt;
+  } else {
+    const double h = model.settings.dt / memory.substeps;  // s
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = substep_velocity(memory, n, h, state.x[n], state.v[n]);
+  }
   // The force each constraint applied this step, elastic and damping (XPBD: lambda / dt^2), N.
   for (Index s = obj.spring_begin; s < obj.spring_end; ++s) state.spring_force[s] = memory.lambda[s] * inv_dt * inv_dt;
   for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t)
@@ -496,6 +510,7 @@ void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
   memory.cell_rotation_matrix.resize(model.cell_count());
   memory.spring_inv_denominator.resize(model.springs.size());
   memory.denominator_stiffness.assign(model.objects.size(), 0.0);  // 0: not computed yet
+  memory.denominator_substeps.assign(model.objects.size(), 0);
   memory.object_work.resize(model.objects.size());
   for (std::size_t i = 0; i < model.objects.size(); ++i) {
     const ObjectModel& o = model.objects[i];
@@ -528,6 +543,7 @@ void size_dynamics_memory(const Model& model, DynamicsMemory& memory) {
 }
 
 void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  memory.substeps = 1;  // the paper's response: the sweeps are iterations of one step
   plan_step(state, memory, pool);
   if (!memory.use_stages) {  // one task per object, its whole step in it
     parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
@@ -609,6 +625,28 @@ void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMem
     }
     records_to_nodes(obj, state, memory);
     project_cell_constraints(model, obj, state, memory);
+  });
+}
+
+void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  const double dt = model.settings.dt, h = dt / memory.substeps;  // s
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    const ObjectModel& obj = model.objects[memory.object_tasks[task]];
+    if (obj.dynamics != DynamicsKind::MassSpring) return;
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) {
+      // The step's v holds all of g dt; substep 0 keeps g h of it, each later one adds g h.
+      const Vec3 u = k == 0 ? Vec3(state.v[n] + memory.substep_gravity * (h - dt))
+                            : Vec3(substep_velocity(memory, n, h, state.x[n], state.v[n]) + memory.substep_gravity * h);  // m/s
+      const Vec3 x_sub = k == 0 ? memory.x_prev[n] : state.x[n];
+      std::copy_n(x_sub.data(), 3, memory.start_record.get() + kNodeRecord * n);
+      state.v[n] = u;
+      state.x[n] = x_sub + h * u;
+    }
+    if (k == 0) return;  // the prediction reset them
+    for (Index s = obj.spring_begin; s < obj.spring_end; ++s) memory.lambda[s] = 0.0;
+    for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) memory.tetrahedron_lambda[t] = 0.0;
+    if (obj.mass_spring.shape_stiffness > 0.0)
+      for (Index c = obj.cell_begin; c < obj.cell_end; ++c) memory.cell_shape_lambda[c] = 0.0;
   });
 }
 

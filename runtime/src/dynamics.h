@@ -30,6 +30,11 @@ struct DynamicsMemory {
   // `denominator_stiffness` (per object): recomputed only when a command changes it.
   std::vector<double> spring_inv_denominator;
   std::vector<double> denominator_stiffness;
+  std::vector<int> denominator_substeps;  // per object: the substeps they were computed for
+  // The step in substeps of dt / substeps (solver_substeps: one per sweep), or 1: one step of
+  // dt, the sweeps iterations of it. Set before the prediction.
+  int substeps = 1;
+  Vec3 substep_gravity = Vec3::Zero();  // m/s^2: gravity spread over the substeps (0: none, or no substeps)
   // Scheduling the objects over the pool: each object's work (projections per step), the
   // objects by decreasing work, and the tasks of this step.
   std::vector<double> object_work;
@@ -100,6 +105,11 @@ void integrate_dynamics(const Model& model, State& state, DynamicsMemory& memory
 void predict_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
 int dynamics_iterations(const Model& model);  // the most sweeps an object asks for
 void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool);
+// Substep k of memory.substeps (h = dt / substeps) of every stepping mass-spring object: the
+// substep's start x_sub (start_record) and its prediction x = x_sub + h u, with u kept in v
+// until finish_dynamics: the substep before's velocity plus g h (at k = 0: the step's v, with
+// g h of its g dt); the multipliers reset (XPBD with small steps, Macklin et al. 2019).
+void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memory, WorkerPool* pool);
 void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
 // Sweeps [first, last) of every object's springs alone, stage by stage (sweep_dynamics adds
 // the volumes and shapes).

@@ -58,8 +58,8 @@ Vec3 probe_force(const Model& model, const State& state, const Vec3& device_velo
 }
 
 Vec3 grab_velocity_change(const Model& model, double inv_mass, const Vec3& to_target, const Vec3& velocity,
-                          const Vec3& force_so_far) {
-  const double dt = model.settings.dt, k = model.settings.grab.stiffness, c = model.settings.grab.damping;
+                          const Vec3& force_so_far, double dt) {
+  const double k = model.settings.grab.stiffness, c = model.settings.grab.damping;
   return dt * inv_mass * (k * to_target - force_so_far - c * velocity) /
          (1.0 + dt * c * inv_mass + dt * dt * k * inv_mass);
 }
@@ -101,7 +101,7 @@ void step_grab(const Model& model, State& state) {
     velocity += w[j] * state.v[nodes[j]];
     inv_mass += w[j] * w[j] * model.node_inv_mass[nodes[j]];
   }
-  const Vec3 dv = grab_velocity_change(model, inv_mass, grab.target - point, velocity, Vec3::Zero());
+  const Vec3 dv = grab_velocity_change(model, inv_mass, grab.target - point, velocity, Vec3::Zero(), model.settings.dt);
   for (int j = 0; j < 8; ++j) state.v[nodes[j]] += (w[j] * model.node_inv_mass[nodes[j]] / inv_mass) * dv;
   grab.force = dv / (inv_mass * model.settings.dt);
 }

@@ -30,7 +30,7 @@ Vec3 probe_force(const Model& model, const State& state, const Vec3& device_velo
 // applies it over its iterations, which makes this XPBD's soft constraint with compliance
 // 1 / k), the change of the point's velocity this step (m/s).
 Vec3 grab_velocity_change(const Model& model, double inv_mass, const Vec3& to_target, const Vec3& velocity,
-                          const Vec3& force_so_far);
+                          const Vec3& force_so_far, double step);
 
 // The probe's sample nodes relative to its centre, for a unit radius: the centre, the 6 axis
 // directions, 12 edge and 8 corner directions of a cube (27 in all).

@@ -37,7 +37,7 @@ const std::vector<std::string_view> kGrabKeys = {"stiffness", "damping"};
 const std::vector<std::string_view> kSimulationKeys = {
     "dt",      "gravity",         "alpha",          "beta", "seed",
     "effects", "hash_table_size", "hash_cell_size", "min_box_thickness", "accuracy", "sub_box_split",
-    "sleep_radius", "sleep_time", "response", "rolling_resistance", "box_overlap", "edge_contacts", "solver_edge_contacts"};
+    "sleep_radius", "sleep_time", "response", "rolling_resistance", "box_overlap", "edge_contacts", "solver_edge_contacts", "solver_substeps"};
 const std::vector<std::string_view> kPlaneKeys = {"name", "normal", "offset", "point"};
 const std::vector<std::string_view> kObjectKeys = {
     "name",         "mesh",          "shape",          "glyph",          "size",
@@ -156,6 +156,7 @@ class SceneReader {
     settings.box_overlap = sim.boolean("box_overlap", settings.box_overlap);
     settings.edge_contacts = sim.boolean("edge_contacts", settings.edge_contacts);
     settings.solver_edge_contacts = sim.boolean("solver_edge_contacts", settings.solver_edge_contacts);
+    settings.solver_substeps = sim.boolean("solver_substeps", settings.solver_substeps);
     if (const std::optional<std::string> response = sim.string("response"))
       if (!response_from_name(*response, settings.response))
         sim.fail_at("response", "unknown response " + in_quotes(*response) + " (valid: \"paper\", \"solver\")");

@@ -356,13 +356,13 @@ TEST_CASE("scene structure errors", "[scene_loader]") {
     require_error(
         "[simulation]\neffects = []\nwind = 3\n",
         "inline.toml:3:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap, edge_contacts, solver_edge_contacts)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap, edge_contacts, solver_edge_contacts, solver_substeps)");
   }
   SECTION("the first unknown key in file order is reported") {
     require_error(
         "[simulation]\nwind = 1\neffects = []\nalpha_ = 1\n",
         "inline.toml:2:1: simulation.wind: unknown key 'wind' (valid keys: dt, gravity, alpha, beta, "
-        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap, edge_contacts, solver_edge_contacts)");
+        "seed, effects, hash_table_size, hash_cell_size, min_box_thickness, accuracy, sub_box_split, sleep_radius, sleep_time, response, rolling_resistance, box_overlap, edge_contacts, solver_edge_contacts, solver_substeps)");
   }
   SECTION("a key that is the start of a valid one") {
     require_error(scene_with_object("name = \"a\"\nrotation = [0, 45, 0]\n"),

@@ -166,6 +166,11 @@ struct SimulationSettings {
   // of another object as a constraint solved with the others (contact_solver.h). Asked for by
   // name while a box resting on another still trembles with them (docs/limits.md).
   bool solver_edge_contacts = false;
+  // Under the response "solver": its sweeps as substeps of dt / sweeps (XPBD with small
+  // steps, Macklin et al. 2019), each with its own prediction and the contacts' loads
+  // carried over, instead of iterations of one step. A stiff lattice then holds its shape
+  // where a contact pushes a few of its nodes (docs/limits.md).
+  bool solver_substeps = false;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
   // sleep_radius of one point for sleep_time falls asleep (runtime/src/sleep.h).
