@@ -111,6 +111,7 @@ std::string random_pile_scene(const PileOptions& o) {
       " m wide.\n\n[simulation]\ndt = 0.001\ngravity = [0.0, -9.81, 0.0]\nalpha = 1.0\nbeta = 0.5\nseed = " +
       std::to_string(o.seed) + (o.box_overlap ? "\nbox_overlap = true" : "") +
       (o.edge_contacts ? "" : "\nedge_contacts = false") + (o.solver_edge_contacts ? "\nsolver_edge_contacts = true" : "") +
+      (o.solver_substeps ? "\nsolver_substeps = true" : "") +
       "\neffects = [\"gravity\", \"planes\", \"inter_collision\", \"self_collision\", \"friction\", \"probe\", \"grab\"]\n"
       "\n[[plane]]\nname = \"floor\"\nnormal = [0.0, 1.0, 0.0]\noffset = 0.0\n";
   const struct {

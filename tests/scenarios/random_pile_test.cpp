@@ -43,6 +43,11 @@ TEST_CASE("a random pile is the same for the same seed and differs between seeds
   options.edge_contacts = false;
   CHECK_FALSE(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.edge_contacts);
   options.edge_contacts = true;
+  // solver_substeps is off by default: written only when asked for, and read back.
+  CHECK(first.find("solver_substeps") == std::string::npos);
+  options.solver_substeps = true;
+  CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.solver_substeps);
+  options.solver_substeps = false;
   options.objects = 0;
   CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
   options.objects = 6;

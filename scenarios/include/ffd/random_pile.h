@@ -20,6 +20,7 @@ struct PileOptions {
   bool box_overlap = false;    // written as [simulation] box_overlap = true
   bool edge_contacts = true;   // the default; off: written as [simulation] edge_contacts = false
   bool solver_edge_contacts = false;  // written as [simulation] solver_edge_contacts = true
+  bool solver_substeps = false;       // written as [simulation] solver_substeps = true
 };
 
 // The scene: `objects` objects of random shape, size and orientation in a column above a
