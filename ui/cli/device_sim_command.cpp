@@ -259,16 +259,19 @@ int run_device_sim(const DeviceSimOptions& o) {
 
   if (!o.out_path.empty()) {
     std::ofstream csv(o.out_path);
-    csv << "t_ms,sent,x,y,z,fx,fy,fz,status,step\n";
+    // sent_at_ms: when the sample left, ms after the start (-1: not sent); a sender held up by
+    // its scheduler sends later than its t_ms.
+    csv << "t_ms,sent,x,y,z,fx,fy,fz,status,step,sent_at_ms\n";
     std::size_t r = 0;
     ffd::device::Force newest;
     for (std::size_t ms = 0; ms < positions.size(); ++ms) {
       const std::int64_t end = start + static_cast<std::int64_t>(ms + 1) * 1'000'000;
       while (r < received.size() && received[r].at_ns < end) newest = received[r++].force;
+      const double sent_at_ms = sent_at[ms] >= 0 ? static_cast<double>(sent_at[ms] - start) * 1e-6 : -1.0;
       char line[256];
-      std::snprintf(line, sizeof line, "%zu,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%u,%llu\n", ms, sent_at[ms] >= 0 ? 1 : 0,
+      std::snprintf(line, sizeof line, "%zu,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%u,%llu,%.3f\n", ms, sent_at[ms] >= 0 ? 1 : 0,
                     positions[ms].x(), positions[ms].y(), positions[ms].z(), newest.force.x(), newest.force.y(),
-                    newest.force.z(), newest.status, static_cast<unsigned long long>(newest.step));
+                    newest.force.z(), newest.status, static_cast<unsigned long long>(newest.step), sent_at_ms);
       csv << line;
     }
     if (!csv) {
