@@ -123,6 +123,9 @@ void apply_command(const Model& model, const State& initial, State& state, const
       std::copy(initial.anchors.begin(), initial.anchors.begin() + static_cast<std::ptrdiff_t>(initial.anchor_count),
                 state.anchors.begin());
       state.anchor_count = initial.anchor_count;
+      std::copy(initial.edge_holds.begin(),
+                initial.edge_holds.begin() + static_cast<std::ptrdiff_t>(initial.edge_hold_count), state.edge_holds.begin());
+      state.edge_hold_count = initial.edge_hold_count;
       state.probe = initial.probe;
       state.grab = initial.grab;
       state.step = step;

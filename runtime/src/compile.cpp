@@ -582,6 +582,7 @@ State initial_state(const Model& model) {
   // Room for 4 sticking contacts a cell, at least 4,096 (the solver's friction anchors); more
   // are not anchored.
   state.anchors.resize(std::max<std::size_t>(4096, 4 * model.cell_count()));
+  state.edge_holds.resize(state.anchors.size());  // likewise for the held edge contacts
   // Shape matching measures rotations from the rest frame, so a rotated object starts there.
   state.cell_rotation.assign(model.cell_count(), Quat::Identity());
   state.cell_shape_force.assign(model.cell_count(), 0.0);

@@ -340,30 +340,77 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
 // where the lattice maps the surface's point, the crossing's where the flat triangles put it;
 // where the two differ by more than the speculative distance the constraint would push the
 // wrong point, and the crossing is left to the box contacts.
+namespace {
+
+// An edge contact's two points (the edge's, side b; the triangle's, side a), each carried by
+// the cell that holds it at rest. False where no cell holds one.
+bool edge_contact_sides(const Model& model, const EdgeHold& e, ContactRecord& r) {
+  const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
+  const std::array<Index, 3>& tri = model.surface_triangles[e.triangle];
+  const Vec3 on_edge = (1.0 - e.along) * rest(e.edge[0]) + e.along * rest(e.edge[1]);
+  const Vec3 on_triangle =
+      e.barycentric[0] * rest(tri[0]) + e.barycentric[1] * rest(tri[1]) + e.barycentric[2] * rest(tri[2]);
+  return surface_point(model, e.edge[0], on_edge, r.b) && surface_point(model, tri[0], on_triangle, r.a);
+}
+
+// Whether an edge contact's points are within the speculative distance: apart along its
+// normal by less (or crossed), and across it by less (they have not slid apart).
+bool edge_points_near(const Vec3& normal, const Vec3& offset) {
+  const double along = normal.dot(offset);
+  return along < kSpeculativeDistance && (offset - along * normal).norm() < kSpeculativeDistance;
+}
+
+void add_edge_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord& r, const EdgeHold& source) {
+  if (scratch.constraint_count < scratch.constraints.size())
+    scratch.edge_sources[scratch.constraint_count - scratch.edge_contact_begin] = source;
+  add_contact(bodies, scratch, r);
+}
+
+}  // namespace
+
 void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                         StageCounters& counters, double& max_depth) {
   const Bodies bodies{model, state, scratch};
   find_crossed_edges(model, *level.boxes, state, scratch, counters);
   scratch.edge_contact_begin = scratch.constraint_count;
-  const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
+  Index crossed = 0;
   for (Index i = 0; i < scratch.edge_crossing_count; ++i) {
     const EdgeCrossing& crossing = scratch.edge_crossings[i];
-    const std::array<Index, 3>& tri = model.surface_triangles[crossing.triangle];
-    const Vec3 on_edge = (1.0 - crossing.along) * rest(crossing.edge[0]) + crossing.along * rest(crossing.edge[1]);
-    const Vec3 on_triangle = crossing.barycentric[0] * rest(tri[0]) + crossing.barycentric[1] * rest(tri[1]) +
-                             crossing.barycentric[2] * rest(tri[2]);
+    const EdgeHold source{contact_key(ContactKey::SurfaceEdge, state.params.accuracy, crossing.triangle, crossing.edge[0]),
+                          crossing.edge,
+                          crossing.along,
+                          crossing.triangle,
+                          crossing.barycentric,
+                          crossing.normal};
     ContactRecord r;
-    if (!surface_point(model, crossing.edge[0], on_edge, r.b) || !surface_point(model, tri[0], on_triangle, r.a)) continue;
+    if (!edge_contact_sides(model, source, r)) continue;
     if ((bodies.point(r.b) - crossing.point).norm() > kSpeculativeDistance ||
         (bodies.point(r.a) - crossing.point).norm() > kSpeculativeDistance)
       continue;
     r.normal = crossing.normal;
     r.depth = crossing.depth + model.surface_skin;
-    r.key = contact_key(ContactKey::SurfaceEdge, state.params.accuracy, crossing.triangle, crossing.edge[0]);
+    r.key = source.key;
     ++counters.inter_contacts;
     max_depth = std::max(max_depth, crossing.depth);
     scratch.record_contact(crossing.point, crossing.normal, crossing.depth, ContactKind::Inter);
-    add_contact(bodies, scratch, r);
+    add_edge_contact(bodies, scratch, r, source);
+    if (crossed < scratch.crossing_keys.size()) scratch.crossing_keys[crossed++] = source.key;
+  }
+  // The contacts the last step held and this one did not find crossed: speculative while
+  // their points stay near, holding the edge the skin in front of the triangle.
+  const auto keys = scratch.crossing_keys.begin();
+  std::sort(keys, keys + crossed);
+  for (std::size_t h = 0; h < state.edge_hold_count; ++h) {
+    const EdgeHold& hold = state.edge_holds[h];
+    if (std::binary_search(keys, keys + crossed, hold.key)) continue;
+    ContactRecord r;
+    if (!edge_contact_sides(model, hold, r)) continue;
+    const Vec3 offset = bodies.point(r.b) - bodies.point(r.a);
+    if (!edge_points_near(hold.normal, offset)) continue;
+    r.normal = hold.normal;
+    r.depth = model.surface_skin - hold.normal.dot(offset);
+    r.key = hold.key;
+    add_edge_contact(bodies, scratch, r, hold);
   }
   scratch.edge_contact_end = scratch.constraint_count;
 }
@@ -836,6 +883,26 @@ void keep_anchors(const Model& model, State& state, StepMemory& scratch, double 
   std::copy(begin, begin + static_cast<std::ptrdiff_t>(state.anchor_count), state.anchors.begin());
 }
 
+// The edge contacts whose points end the step near each other are held into the next
+// (State::edge_holds); the others let go.
+void keep_edge_holds(const Model& model, State& state, StepMemory& scratch) {
+  const Bodies bodies{model, state, scratch};
+  std::size_t count = 0;
+  const Index end = std::min(scratch.edge_contact_end, scratch.constraint_count);
+  for (Index i = scratch.edge_contact_begin; i < end; ++i) {
+    const ContactConstraint& c = scratch.constraints[i];
+    if (c.key != 0 && edge_points_near(c.normal, bodies.point(c.b) - bodies.point(c.a)))
+      scratch.next_edge_holds[count++] = scratch.edge_sources[i - scratch.edge_contact_begin];
+  }
+  const auto begin = scratch.next_edge_holds.begin();
+  const auto by_key = [](const EdgeHold& a, const EdgeHold& b) { return a.key < b.key; };
+  std::sort(begin, begin + static_cast<std::ptrdiff_t>(count), by_key);
+  const auto kept = std::unique(begin, begin + static_cast<std::ptrdiff_t>(count),
+                                [](const EdgeHold& a, const EdgeHold& b) { return a.key == b.key; });
+  state.edge_hold_count = std::min(static_cast<std::size_t>(kept - begin), state.edge_holds.size());
+  std::copy(begin, begin + static_cast<std::ptrdiff_t>(state.edge_hold_count), state.edge_holds.begin());
+}
+
 // Substep k of the solve (solver_substeps): the objects' and the probe's predictions over
 // h = dt / substeps from where the substep before left them; each contact's normal correction
 // so far moved to `pushed`, so that a later substep never pulls back what an earlier one
@@ -898,6 +965,7 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
       c.pushed = 0.0;
     }
   keep_anchors(model, state, scratch, beta);
+  keep_edge_holds(model, state, scratch);
   finish_dynamics(model, state, scratch, scratch.pool);
   const double dt = model.settings.dt;
   if (has(model.settings.effects, Effect::Probe)) {

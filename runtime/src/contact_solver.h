@@ -64,8 +64,12 @@ struct SolverMemory {
   Index constraint_count = 0;
   std::vector<ContactAnchor> next_anchors;  // the contacts that stuck this step (as constraints)
   std::vector<Index> friction_contacts;     // the resting contacts the friction passes revisit
-  // The edge contacts' place in the list: constraints[edge_contact_begin .. edge_contact_end).
+  // The edge contacts' place in the list: constraints[edge_contact_begin .. edge_contact_end),
+  // each one's points in edge_sources[i - edge_contact_begin] (the crossings' keys, sorted, in
+  // crossing_keys: a held contact found crossed again is not added twice).
   Index edge_contact_begin = 0, edge_contact_end = 0;
+  std::vector<EdgeHold> edge_sources, next_edge_holds;
+  std::vector<std::uint64_t> crossing_keys;
   Index friction_contact_count = 0;
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;

@@ -108,6 +108,9 @@ void size_solver_memory(const Model& model, SolverMemory& s) {
   s.constraints.resize(std::max<std::size_t>(4096, 4 * largest_box_set(model)));
   s.next_anchors.resize(s.constraints.size());
   s.friction_contacts.resize(s.constraints.size());
+  s.edge_sources.resize(s.constraints.size());
+  s.next_edge_holds.resize(s.constraints.size());
+  s.crossing_keys.resize(s.constraints.size());
   s.object_solving.assign(model.objects.size(), 0);
   s.object_motion.resize(model.objects.size());
   s.node_stamp.assign(model.node_count(), 0);
@@ -163,6 +166,9 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
     memory.constraints.resize(2 * memory.constraints.size());
     memory.next_anchors.resize(memory.constraints.size());
     memory.friction_contacts.resize(memory.constraints.size());
+    memory.edge_sources.resize(memory.constraints.size());
+    memory.next_edge_holds.resize(memory.constraints.size());
+    memory.crossing_keys.resize(memory.constraints.size());
   }
   if (!last.hash_overflow || !model.collides) return;
   grow_broad_phase_memory(model, memory);

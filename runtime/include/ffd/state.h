@@ -1,6 +1,7 @@
 #pragma once
 // State: everything that changes while a scene runs. The step index is the only clock.
 // Two States built from the same Model and advanced by the same commands are bit-identical.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -51,6 +52,21 @@ struct ContactAnchor {
   Vec3 offset = Vec3::Zero();  // m, in the frame of the face it lies on, so that it turns with it
 };
 
+// An edge contact of the response "solver" (solver_edge_contacts) that the last step ended
+// with its points within kSpeculativeDistance of each other: held the next step as a
+// speculative contact though the edge no longer crosses, so that a surface pushed out the
+// skin's width is not let fall back through it (an edge crossing is found only once made).
+// Its points as find_edge_contacts takes them: on surface edge `edge` at `along`, and on
+// surface triangle `triangle` at `barycentric`.
+struct EdgeHold {
+  std::uint64_t key = 0;  // the contact's key (contact_solver.cpp), the order they are kept in
+  std::array<Index, 2> edge{};
+  double along = 0.0;
+  Index triangle = 0;
+  Vec3 barycentric = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();  // unit, out of the triangle's side, as when the edge crossed
+};
+
 struct State {
   std::uint64_t step = 0;  // steps taken since time zero
   TunableParams params;
@@ -81,6 +97,10 @@ struct State {
   // anchors[0 .. anchor_count); the vector's size is its fixed capacity (initial_state).
   std::vector<ContactAnchor> anchors;
   std::size_t anchor_count = 0;
+  // The edge contacts held from the last step, sorted by key: edge_holds[0 .. edge_hold_count);
+  // the vector's size is its fixed capacity (initial_state).
+  std::vector<EdgeHold> edge_holds;
+  std::size_t edge_hold_count = 0;
 };
 
 // FNV-1a (64 bit) over the raw bits, one 64-bit word at a time, of every x, then every v,
