@@ -330,16 +330,6 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   scratch.contacts_dropped += static_cast<std::uint32_t>(total[1] - scratch.contact_count);
 }
 
-// The edge contacts ([simulation] solver_edge_contacts): each half of a pair of cells of two
-// objects whose deepest edge crossing (find_crossed_edges) becomes a constraint between the
-// point of the edge and the point of the triangle where they cross, each carried by the cell
-// that holds it at rest, the edge to go back along the crossing's normal by its depth and the
-// skin further (Model::surface_skin), as the paper's response puts a vertex, so that it is not
-// found crossed again the next step: moved only to the face or the edge it passes, a letter
-// leaning on a plate's rim touched it for ever (box_overlap_test.cpp). A carried point is
-// where the lattice maps the surface's point, the crossing's where the flat triangles put it;
-// where the two differ by more than the speculative distance the constraint would push the
-// wrong point, and the crossing is left to the box contacts.
 namespace {
 
 // An edge contact's two points (the edge's, side b; the triangle's, side a), each carried by
@@ -367,6 +357,18 @@ void add_edge_contact(const Bodies& bodies, StepMemory& scratch, const ContactRe
 }
 
 }  // namespace
+
+// The edge contacts ([simulation] solver_edge_contacts): each half of a pair of cells of two
+// objects whose deepest edge crossing (find_crossed_edges) becomes a constraint between the
+// point of the edge and the point of the triangle where they cross, each carried by the cell
+// that holds it at rest, the edge to go back along the crossing's normal by its depth and the
+// skin further (Model::surface_skin), as the paper's response puts a vertex, so that it is not
+// found crossed again the next step: moved only to the face or the edge it passes, a letter
+// leaning on a plate's rim touched it for ever (box_overlap_test.cpp). A carried point is
+// where the lattice maps the surface's point, the crossing's where the flat triangles put it;
+// where the two differ by more than the speculative distance the constraint would push the
+// wrong point, and the crossing is left to the box contacts. Then the contacts the last step
+// held (State::edge_holds) and this one did not find crossed, speculative.
 
 void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                         StageCounters& counters, double& max_depth) {

@@ -104,13 +104,18 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
   s.surface_changed.assign(model.cell_count(), 0);
 }
 
-void size_solver_memory(const Model& model, SolverMemory& s) {
-  s.constraints.resize(std::max<std::size_t>(4096, 4 * largest_box_set(model)));
+// The arrays with an entry per contact constraint, sized to the constraints' room.
+void size_per_constraint(SolverMemory& s) {
   s.next_anchors.resize(s.constraints.size());
   s.friction_contacts.resize(s.constraints.size());
   s.edge_sources.resize(s.constraints.size());
   s.next_edge_holds.resize(s.constraints.size());
   s.crossing_keys.resize(s.constraints.size());
+}
+
+void size_solver_memory(const Model& model, SolverMemory& s) {
+  s.constraints.resize(std::max<std::size_t>(4096, 4 * largest_box_set(model)));
+  size_per_constraint(s);
   s.object_solving.assign(model.objects.size(), 0);
   s.object_motion.resize(model.objects.size());
   s.node_stamp.assign(model.node_count(), 0);
@@ -164,11 +169,7 @@ void grow_scratch(const Model& model, Scratch& scratch, const StepReport& last) 
   // Contact constraints: twice the room, up to 64 per box of the largest set.
   if (last.constraints_overflow && memory.constraints.size() < 64 * largest_box_set(model) + 4096) {
     memory.constraints.resize(2 * memory.constraints.size());
-    memory.next_anchors.resize(memory.constraints.size());
-    memory.friction_contacts.resize(memory.constraints.size());
-    memory.edge_sources.resize(memory.constraints.size());
-    memory.next_edge_holds.resize(memory.constraints.size());
-    memory.crossing_keys.resize(memory.constraints.size());
+    size_per_constraint(memory);
   }
   if (!last.hash_overflow || !model.collides) return;
   grow_broad_phase_memory(model, memory);
