@@ -70,6 +70,8 @@ struct SolverMemory {
   Index edge_contact_begin = 0, edge_contact_end = 0;
   std::vector<EdgeHold> edge_sources, next_edge_holds;
   std::vector<std::uint64_t> crossing_keys;
+  std::vector<Index> edge_order;            // drop_opposed_edge_contacts: the edge contacts by their cells
+  std::vector<std::uint8_t> edge_dropped;   // and which of them let go
   Index friction_contact_count = 0;
   bool constraints_dropped = false;
   std::vector<std::uint8_t> object_solving;

@@ -111,6 +111,8 @@ void size_per_constraint(SolverMemory& s) {
   s.edge_sources.resize(s.constraints.size());
   s.next_edge_holds.resize(s.constraints.size());
   s.crossing_keys.resize(s.constraints.size());
+  s.edge_order.resize(s.constraints.size());
+  s.edge_dropped.resize(s.constraints.size());
 }
 
 void size_solver_memory(const Model& model, SolverMemory& s) {

@@ -26,12 +26,12 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
 
 // A row's response as the table names it, by what differs from the defaults: "paper",
 // "paper + box_overlap", "paper without edge_contacts", "solver" (no edge contacts),
-// "solver + solver_edge_contacts".
-std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts) {
+// "solver + solver_edge_contacts", "solver + solver_edge_contacts + solver_substeps".
+std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts, bool substeps) {
   const bool paper = response == ffd::ContactResponse::Paper;
   return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "") +
          (paper && !edge_contacts ? " without edge_contacts" : "") +
-         (!paper && edge_contacts ? " + solver_edge_contacts" : "");
+         (!paper && edge_contacts ? " + solver_edge_contacts" : "") + (!paper && substeps ? " + solver_substeps" : "");
 }
 
 }  // namespace
@@ -46,6 +46,7 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
   // The response's edge contacts ran (the solver's are asked for by name).
   run.edge_contacts = model.settings.edge_contacts &&
                       (response == ffd::ContactResponse::Paper || model.settings.solver_edge_contacts);
+  run.substeps = response == ffd::ContactResponse::Solver && model.settings.solver_substeps;
   run.steps = steps;
   run.sample_every = sample_every;
   ffd::State state = initial_state_at(model, level, response);
@@ -105,10 +106,10 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
 
 std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& cpu, int objects) {
   if (runs.empty()) return "No piles were run.\n";
-  std::vector<std::tuple<ffd::ContactResponse, bool, bool, ffd::Accuracy>> keys;
+  std::vector<std::tuple<ffd::ContactResponse, bool, bool, bool, ffd::Accuracy>> keys;
   std::vector<std::uint64_t> seeds;
   for (const PileRun& r : runs) {
-    const std::tuple key{r.response, r.box_overlap, r.edge_contacts, r.level};
+    const std::tuple key{r.response, r.box_overlap, r.edge_contacts, r.substeps, r.level};
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
     if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
   }
@@ -126,13 +127,13 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
        "crossing: the longest time one pair of objects (or one object with itself) stayed crossed.\n\n";
   s << "| Response | Level | Clean piles | Pairs, mean of piles' max | Pairs in the last second, max | Longest crossing "
        "| Step p50 / p99 |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& [response, box_overlap, edge_contacts, level] : keys) {
+  for (const auto& [response, box_overlap, edge_contacts, substeps, level] : keys) {
     std::size_t clean = 0, count = 0, last_max = 0;
     double max_sum = 0.0, longest = 0.0, p50 = 0.0, p99 = 0.0;
     const PileRun* longest_run = nullptr;
     for (const PileRun& r : runs) {
       if (r.response != response || r.box_overlap != box_overlap || r.edge_contacts != edge_contacts ||
-          r.level != level)
+          r.substeps != substeps || r.level != level)
         continue;
       ++count;
       clean += r.clean() ? 1 : 0;
@@ -145,7 +146,7 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
       p50 += r.step_p50_ms;
       p99 = std::max(p99, r.step_p99_ms);
     }
-    s << "| " << response_label(response, box_overlap, edge_contacts) << " | " << static_cast<int>(level) << " "
+    s << "| " << response_label(response, box_overlap, edge_contacts, substeps) << " | " << static_cast<int>(level) << " "
       << ffd::accuracy_name(level) << " | " << clean << " / " << count << " | "
       << fixed(max_sum / static_cast<double>(count), 1) << " | " << last_max << " | "
       << (longest > 0.0 ? fixed(longest, 0) + " ms (pile " + std::to_string(longest_run->seed) + ": " +
@@ -163,7 +164,7 @@ std::string markdown_unclean_piles(const std::vector<PileRun>& runs) {
     if (r.clean()) continue;
     if (!header) s << "Piles that are not clean:\n\n";
     header = true;
-    s << "- pile " << r.seed << ", " << response_label(r.response, r.box_overlap, r.edge_contacts) << " level "
+    s << "- pile " << r.seed << ", " << response_label(r.response, r.box_overlap, r.edge_contacts, r.substeps) << " level "
       << static_cast<int>(r.level) << ": " << (r.finite ? "" : "NOT FINITE; ")
       << (r.at_rest ? "" : "not at rest at the end; ") << r.last_second_max << " pairs in the last second (max "
       << r.pairs_max << "), longest crossing " << fixed(r.longest_crossing_ms, 0)
@@ -180,6 +181,7 @@ nlohmann::json to_json(const std::vector<PileRun>& runs) {
                    {"response", ffd::response_name(r.response)},
                    {"box_overlap", r.box_overlap},
                    {"edge_contacts", r.edge_contacts},
+                   {"solver_substeps", r.substeps},
                    {"steps", r.steps},
                    {"sample_every_steps", r.sample_every},
                    {"pairs", r.pairs},

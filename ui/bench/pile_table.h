@@ -18,6 +18,7 @@ struct PileRun {
   ffd::ContactResponse response = ffd::ContactResponse::Paper;
   bool box_overlap = false;    // the scene's [simulation] box_overlap
   bool edge_contacts = false;  // the response's edge contacts ran ([simulation] edge_contacts; the solver's: solver_edge_contacts)
+  bool substeps = false;       // the solver's sweeps ran as substeps ([simulation] solver_substeps)
   std::uint64_t steps = 0, sample_every = 0;
   // Intersecting triangle pairs (surface_intersections.h: between objects and within one,
   // rest-shape pairs left out) every `sample_every` steps, from the start.
