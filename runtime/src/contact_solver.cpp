@@ -1,8 +1,8 @@
 #include "contact_solver.h"
 
 #include <algorithm>
-#include <tuple>
 #include <cmath>
+#include <tuple>
 
 #include "dynamics.h"
 #include "ffd/box_test.h"
