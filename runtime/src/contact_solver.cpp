@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <tuple>
+#include <utility>
 
 #include "dynamics.h"
 #include "ffd/box_test.h"
@@ -381,25 +381,22 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
-  // The contacts by their unordered pair of cells (then by place in the list).
-  Index* order = scratch.edge_order.data();
+  // The contacts by their unordered pair of cells, then by place in the list.
   const auto cells = [&](Index i) {
     const ContactConstraint& c = scratch.constraints[i];
-    return std::tuple{std::min(c.a.cell, c.b.cell), std::max(c.a.cell, c.b.cell), i};
+    return std::pair{std::min(c.a.cell, c.b.cell), std::max(c.a.cell, c.b.cell)};
   };
-  for (Index i = begin; i < end; ++i) order[i - begin] = i;
-  std::sort(order, order + (end - begin), [&](Index i, Index j) { return cells(i) < cells(j); });
+  Index* order = scratch.edge_order.data();
+  const Index count = end - begin;
+  for (Index i = 0; i < count; ++i) order[i] = begin + i;
+  std::sort(order, order + count, [&](Index i, Index j) { return std::pair{cells(i), i} < std::pair{cells(j), j}; });
   const auto correction = [&](const ContactConstraint& c) {
     return c.rest - c.normal.dot(bodies.point(c.b) - bodies.point(c.a));
   };
   std::uint8_t* dropped = scratch.edge_dropped.data();
-  std::fill(dropped, dropped + (end - begin), std::uint8_t{0});
-  const auto same_cells = [&](Index i, Index j) {
-    return std::get<0>(cells(i)) == std::get<0>(cells(j)) && std::get<1>(cells(i)) == std::get<1>(cells(j));
-  };
-  for (Index g = 0; g < end - begin;) {
-    Index g_end = g + 1;
-    while (g_end < end - begin && same_cells(order[g_end], order[g])) ++g_end;
+  std::fill(dropped, dropped + count, std::uint8_t{0});
+  for (Index g = 0, g_end = 0; g < count; g = g_end) {
+    while (g_end < count && cells(order[g_end]) == cells(order[g])) ++g_end;
     for (Index i = g; i < g_end; ++i)
       for (Index j = i + 1; j < g_end; ++j) {
         const Index ci = order[i], cj = order[j];
@@ -407,7 +404,6 @@ void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
         const ContactConstraint &c = scratch.constraints[ci], &d = scratch.constraints[cj];
         if (opposed(c, d)) dropped[(correction(c) < correction(d) ? ci : cj) - begin] = 1;
       }
-    g = g_end;
   }
   // (The edge contacts end the list here.)
   Index kept = begin;
@@ -432,8 +428,8 @@ void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
 // where the lattice maps the surface's point, the crossing's where the flat triangles put it;
 // where the two differ by more than the speculative distance the constraint would push the
 // wrong point, and the crossing is left to the box contacts. Then the contacts the last step
-// held (State::edge_holds) and this one did not find crossed, speculative.
-
+// held (State::edge_holds) and this one did not find crossed, speculative; of two that push
+// the same two cells opposite ways, one lets go (drop_opposed_edge_contacts).
 void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& scratch,
                         StageCounters& counters, double& max_depth) {
   const Bodies bodies{model, state, scratch};
