@@ -1,5 +1,7 @@
 #include "ffd/random_pile.h"
 
+#include "ffd/spec.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -113,6 +115,9 @@ std::string random_pile_scene(const PileOptions& o) {
       (o.edge_contacts ? "" : "\nedge_contacts = false") + (o.solver_edge_contacts ? "\nsolver_edge_contacts = true" : "") +
       (o.solver_substeps ? "\nsolver_substeps = true" : "") +
       "\neffects = [\"gravity\", \"planes\", \"inter_collision\", \"self_collision\", \"friction\", \"probe\", \"grab\"]\n"
+      // The probe's proxy stays at its start until a device moves it: a cell clear above the
+      // column, where nothing falls on it (its default start lies in the drop column).
+      "\n[probe]\nstart = " + vec3(0.0, top + o.cell_size + ProbeSettings{}.radius, 0.0) + "  # m\n"
       "\n[[plane]]\nname = \"floor\"\nnormal = [0.0, 1.0, 0.0]\noffset = 0.0\n";
   const struct {
     const char* name;

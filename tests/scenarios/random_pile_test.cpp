@@ -94,9 +94,12 @@ TEST_CASE("random piles hold every shape, 3 to 12 cells across, starting apart",
     const ffd::SurfaceIntersections crossings(model);
     CHECK(crossings.rest_pairs() == 0);
     CHECK(crossings.count(state).total() == 0);
-    // Every surface starts inside the box: above the floor and within the walls (0.12 m).
+    // Every surface starts inside the box: above the floor and within the walls (0.12 m); the
+    // probe's proxy starts clear above them all, out of the objects' way down.
+    const double probe_bottom = spec.settings.probe.start.y() - spec.settings.probe.radius;
     for (ffd::Index o = 0; o < model.objects.size(); ++o) {
       for (const ffd::Vec3& v : ffd::deformed_surface(model, state, o).vertices) {
+        CHECK(v.y() < probe_bottom);
         CHECK(v.y() > 0.0);
         CHECK(std::abs(v.x()) < 0.12);
         CHECK(std::abs(v.z()) < 0.12);
