@@ -419,19 +419,20 @@ bool load_triangles(const Model& model, const State& state, CollisionMemory& scr
 
 // Level 5, one half of a cell pair: the surface vertices of cell_b against the triangles
 // with a vertex in cell_a, as the lattice is now. A vertex is inside if it lies behind the
-// closest triangle of cell_a and of the cells around it, none of them inverted. The deepest
-// such vertex moves the cells apart, once per pair half as a plane moves a cell: a response
-// per vertex would push the same two cells dozens of times in one step and store the
-// pushes in the springs.
-template <bool kFriction>
-void test_vertices(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a, bool self,
-                   StageCounters& counters, double& max_depth) {
+// closest triangle of cell_a and of the cells around it, none of them inverted; it is to go
+// out along that triangle's normal to the skin in front (Model::surface_skin; none within one
+// object, where it gained nothing on the random piles:
+// docs/notes/2026-11-28-code-findings.md#self-skin). on_vertex(contact) for each vertex whose
+// push there (VertexContact::depth: behind, its distance and the skin; in front, the skin
+// less its distance) is above `floor` (m), which on_vertex may raise as it goes: the paper's
+// response keeps only the deepest.
+template <class OnVertex>
+void judge_vertices(const Model& model, const State& state, CollisionMemory& scratch, Index cell_b, Index cell_a, bool self,
+                    StageCounters& counters, const double& floor, const OnVertex& on_vertex) {
   const Index tri_begin = model.cell_triangle_begin[cell_a], tri_end = model.cell_triangle_begin[cell_a + 1];
   if (tri_begin == tri_end) return;
   const Index vertex_begin = model.cell_vertex_begin[cell_b], vertex_end = model.cell_vertex_begin[cell_b + 1];
   if (vertex_begin == vertex_end || cell_inverted(model, state, cell_a)) return;
-  // Between objects a vertex goes out to the skin (Model::surface_skin). Not within one,
-  // where it gained nothing on the random piles (docs/notes/2026-11-28-code-findings.md#self-skin).
   const double radius = model.surface_contact_radius, skin = self ? 0.0 : model.surface_skin;
   // The triangles' AABB widened by the radius: vertices outside it miss them all.
   Vec3 reach_lo, reach_hi;
@@ -447,8 +448,6 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
   const Vec3* corners = scratch.triangle_corners.data();
   const bool corners_finite = load_triangles(model, state, scratch, cell_a, crossing_surface(model));
   // (cached_vertex may have refreshed cell_b above: with the same values.)
-  double deepest = 0.0;
-  Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
   Index* __restrict near = scratch.triangle_near.data();
   for (Index i = vertex_begin; i < vertex_end; ++i) {
     const Vec3 p = scratch.surface_x[model.cell_vertices[i]];
@@ -496,10 +495,8 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
       best_triangle = model.cell_triangles[tri_begin + t];
       best_feature = q.feature;
     }
-    // The push that would put p the skin in front of the surface: behind it, its distance
-    // and the skin; in front, the skin less its distance.
     const auto push = [&] { return behind(p, best_point, best_normal) ? skin + std::sqrt(best_sq) : skin - std::sqrt(best_sq); };
-    if (best_normal.squaredNorm() == 0.0 || !(push() > deepest)) continue;
+    if (best_normal.squaredNorm() == 0.0 || !(push() > floor)) continue;
     // Behind the closest triangle of cell_a's patch or within the skin before it; the
     // surface's closest point may lie just past the patch's border, though, with p in front
     // of it (a thin part of the object, a crease): look for it among the triangles of the
@@ -511,12 +508,27 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
     const bool inside = behind(p, best_point, best_normal) &&
                         behind_every_face_at(model, state, scratch, p, best_point, best_triangle, best_feature);
     const double depth = inside ? skin + distance : skin - distance;
-    if (!(depth > deepest)) continue;
+    if (!(depth > floor)) continue;
     const double normal_length = best_normal.norm();
-    deepest = depth;
-    deepest_point = p;
-    deepest_normal = best_normal / normal_length;
+    on_vertex(VertexContact{model.cell_vertices[i], best_triangle, p, best_point, best_normal / normal_length, depth, inside});
   }
+}
+
+// The paper's response at level 5: of one half of a cell pair (judge_vertices), the deepest
+// vertex inside moves the cells apart, once per pair half as a plane moves a cell: a
+// response per vertex would push the same two cells dozens of times in one step and store
+// the pushes in the springs.
+template <bool kFriction>
+void test_vertices(const Model& model, State& state, CollisionMemory& scratch, Index cell_b, Index cell_a, bool self,
+                   StageCounters& counters, double& max_depth) {
+  const double skin = self ? 0.0 : model.surface_skin;
+  double deepest = 0.0;
+  Vec3 deepest_point = Vec3::Zero(), deepest_normal = Vec3::Zero();
+  judge_vertices(model, state, scratch, cell_b, cell_a, self, counters, deepest, [&](const VertexContact& contact) {
+    deepest = contact.depth;
+    deepest_point = contact.point;
+    deepest_normal = contact.normal;
+  });
   if (!(deepest > 0.0)) return;
   if (self) ++counters.self_contacts;
   else ++counters.inter_contacts;
@@ -1203,6 +1215,42 @@ void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch
     if (!same_object && state.params.response == ContactResponse::Paper) {  // test_edges says why
       test_edges<kFriction>(model, state, scratch, c1, c2, crossing_surface(model), counters, max_depth);
       test_edges<kFriction>(model, state, scratch, c2, c1, crossing_surface(model), counters, max_depth);
+    }
+  }
+}
+
+void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double margin,
+                          VertexContactSink& sink) {
+  const BoxSet& boxes = model.boxes;
+  begin_surface_tests(scratch);
+  for (Index p = 0; p < scratch.pair_count; ++p) {
+    const Index c1 = boxes.box_cell[scratch.pairs[p].a], c2 = boxes.box_cell[scratch.pairs[p].b];
+    if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
+    if (sleeping(model)) meet(state, model.cell_object[c1], model.cell_object[c2]);
+    const bool same_object = model.cell_object[c1] == model.cell_object[c2];
+    if (same_object) ++counters.self_pairs_tested;
+    else ++counters.inter_pairs_tested;
+    for (const auto& [cell_b, cell_a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
+      double deepest = -margin;
+      VertexContact contact;
+      judge_vertices(model, state, scratch, cell_b, cell_a, same_object, counters, deepest, [&](const VertexContact& c) {
+        deepest = c.depth;
+        contact = c;
+      });
+      if (!(deepest > -margin)) continue;
+      // Where on the triangle the closest point lies, as the corners are now.
+      const std::array<Index, 3>& tri = model.surface_triangles[contact.triangle];
+      const Vec3& a = cached_vertex(model, state, scratch, tri[0]);
+      const Vec3 ab = cached_vertex(model, state, scratch, tri[1]) - a;
+      const Vec3 ac = cached_vertex(model, state, scratch, tri[2]) - a;
+      const Vec3 aq = contact.closest - a;
+      const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac), d20 = aq.dot(ab), d21 = aq.dot(ac);
+      const double denominator = d00 * d11 - d01 * d01;
+      if (!(denominator > 0.0)) continue;  // a sliver: no point to carry
+      const double v = std::clamp((d11 * d20 - d01 * d21) / denominator, 0.0, 1.0);
+      const double w = std::clamp((d00 * d21 - d01 * d20) / denominator, 0.0, 1.0 - v);
+      contact.barycentric = {1.0 - v - w, v, w};
+      sink.add(contact, same_object);
     }
   }
 }

@@ -229,6 +229,34 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Coll
 template <bool kFriction>
 void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth);
 
+// A surface vertex at level 5 near or behind another cell's surface (collision.cpp,
+// judge_vertices): the vertex is side b, the closest point of the closest triangle side a.
+struct VertexContact {
+  Index vertex = 0, triangle = 0;
+  Vec3 point = Vec3::Zero();    // m, the vertex as the lattice is now
+  Vec3 closest = Vec3::Zero();  // m, the triangle's closest point
+  Vec3 normal = Vec3::Zero();   // unit, the triangle's, out of its surface
+  double depth = 0.0;           // m, the push along the normal that puts the vertex the skin in front
+  bool inside = false;          // behind the surface (else within the skin or `margin` before it)
+  std::array<double, 3> barycentric{};  // of `closest` on the triangle's corners
+};
+class VertexContactSink {
+ public:
+  virtual void add(const VertexContact& contact, bool self) = 0;
+
+ protected:
+  ~VertexContactSink() = default;
+};
+
+// Level 5's vertex contacts as the response "solver" takes them: over the candidate pairs, in
+// pair order, both halves of each, the surface vertex of one cell with the deepest push out
+// of the other's surface, if above -margin (m: inside, or within the skin and `margin` in
+// front), into sink.add. One a pair half, as the paper's response answers them: a contact
+// per vertex costs a closest-triangle search for every vertex near a resting surface.
+// Reads the State but for the sleepers it wakes; refreshes the surface caches.
+void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double margin,
+                          VertexContactSink& sink);
+
 // The edge contacts as the response "solver" takes them: the deepest edge crossing of each
 // half of each pair of cells of two objects (levels 0-3: those whose triangles' bounds meet;
 // level 4: of the paired sub-boxes), as the lattice is now, into NarrowMemory::edge_crossings,

@@ -58,6 +58,7 @@ enum class ContactKey : std::uint64_t {
   PlaneNode = 2,       // a box's tested node against a plane
   PlaneVertex = 3,     // a surface vertex against a plane (level 5)
   SurfaceEdge = 4,     // a surface edge through another object's triangle
+  SurfaceVertex = 5,   // a surface vertex against a triangle of another cell (level 5)
 };
 std::uint64_t contact_key(ContactKey kind, Accuracy accuracy, std::uint64_t a, std::uint64_t b);
 

@@ -256,9 +256,11 @@ void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.edge_contact_begin = scratch.edge_contact_end = 0;
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
-  // Not at level 5: its vertex contacts are answered in the narrow phase, before the solve,
-  // and substep 0's prediction from the step's start would undo those answers.
-  const bool substeps = model.settings.solver_substeps && state.params.accuracy != Accuracy::Exact;
+  // Not where level 5's vertex contacts are answered at once in the narrow phase, before the
+  // solve (without solver_edge_contacts): substep 0's prediction from the step's start would
+  // undo those answers.
+  const bool substeps = model.settings.solver_substeps &&
+                        (state.params.accuracy != Accuracy::Exact || model.settings.solver_edge_contacts);
   scratch.substeps = substeps ? dynamics_iterations(model) : 1;
   scratch.substep_gravity = substeps && has(model.settings.effects, Effect::Gravity) ? state.params.gravity : Vec3::Zero();
   predict_dynamics(model, state, scratch, scratch.pool);
@@ -337,6 +339,46 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   if (total[0] > constraint_room) scratch.constraints_dropped = true;
   scratch.contact_count = static_cast<Index>(std::min<std::size_t>(total[1], log_room));
   scratch.contacts_dropped += static_cast<std::uint32_t>(total[1] - scratch.contact_count);
+}
+
+// Level 5 with solver_edge_contacts: of each half of a pair of cells, the surface vertex
+// deepest inside the other's surface, or within the skin and the speculative distance in
+// front of it (find_vertex_contacts), becomes a constraint between the vertex and the closest
+// point of the closest triangle, carried by the cell that holds that point at rest, to go out
+// along the triangle's normal to the skin in front. Where the carried point and the flat
+// triangle's differ by more than the speculative distance the constraint would push the wrong
+// point: left out, as an edge contact's.
+void find_vertex_constraints(const Model& model, State& state, StepMemory& scratch, StageCounters& counters,
+                             double& max_depth) {
+  struct Sink final : VertexContactSink {
+    const Bodies& bodies;
+    StepMemory& scratch;
+    StageCounters& counters;
+    double& max_depth;
+    Sink(const Bodies& b, StepMemory& s, StageCounters& c, double& d) : bodies(b), scratch(s), counters(c), max_depth(d) {}
+    void add(const VertexContact& contact, bool self) override {
+      const Model& model = bodies.model;
+      const std::array<Index, 3>& tri = model.surface_triangles[contact.triangle];
+      Vec3 rest = Vec3::Zero();
+      for (int k = 0; k < 3; ++k) rest += contact.barycentric[k] * model.surface_vertex_rest[tri[k]];
+      ContactRecord r;
+      r.b = vertex_point(model, contact.vertex);
+      if (!surface_point(model, tri[0], rest, r.a)) return;
+      if ((bodies.point(r.a) - contact.closest).norm() > kSpeculativeDistance) return;
+      r.normal = contact.normal;
+      r.depth = contact.depth;
+      r.key = contact_key(ContactKey::SurfaceVertex, bodies.state.params.accuracy, contact.vertex, contact.triangle);
+      add_contact(bodies, scratch, r);
+      if (!contact.inside) return;
+      ++(self ? counters.self_contacts : counters.inter_contacts);
+      const double skin = self ? 0.0 : model.surface_skin;
+      max_depth = std::max(max_depth, contact.depth - skin);  // the penetration
+      scratch.record_contact(contact.point, contact.normal, contact.depth, self ? ContactKind::Self : ContactKind::Inter);
+    }
+  };
+  const Bodies bodies{model, state, scratch};
+  Sink sink(bodies, scratch, counters, max_depth);
+  find_vertex_contacts(model, state, scratch, counters, kSpeculativeDistance, sink);
 }
 
 namespace {

@@ -6,9 +6,12 @@
 //   BoxUpdate, BroadPhase
 //   NarrowPhase   node-in-box tests on x* (the paper's eq. 3-7, read-only): each node inside,
 //                 or within kSpeculativeDistance outside, becomes a ContactConstraint
-//                 (find_box_contacts)
-//                 with edge contacts (levels 0-4), each edge of one object's surface that
-//                 crosses a triangle of another's, likewise (find_edge_contacts)
+//                 (find_box_contacts); at level 5 with solver_edge_contacts, of each half
+//                 of a pair of cells the surface vertex deepest inside the other's surface
+//                 or near it, likewise (find_vertex_constraints; without, they are answered
+//                 at once, as the paper's response answers them)
+//                 with edge contacts, each edge of one object's surface that crosses a
+//                 triangle of another's, likewise (find_edge_contacts)
 //   Planes        each tested node below a plane or within kSpeculativeDistance above it,
 //                 likewise (find_plane_contacts)
 //   Interaction   the probe's coupling predicted, its contacts found (find_probe_contacts)
@@ -116,6 +119,8 @@ void begin_solver_step(const Model& model, State& state, StepMemory& memory);
 
 void find_box_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                        StageCounters& counters, double& max_depth);
+void find_vertex_constraints(const Model& model, State& state, StepMemory& memory, StageCounters& counters,
+                             double& max_depth);
 void find_edge_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,
                         StageCounters& counters, double& max_depth);
 void find_plane_contacts(const Model& model, const BoxLevel& level, State& state, StepMemory& memory,

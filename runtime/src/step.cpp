@@ -197,10 +197,11 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
   // The exact edge contacts (BoxLevel::edges) read where the step started; under the solver
-  // at levels 0-4 where the scene asks (level 5 answers its vertex contacts at once and tests
-  // no edges).
+  // where the scene asks, and then level 5's vertex contacts are constraints too (without,
+  // they are answered at once, as under the paper's response).
   const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
-  const bool solver_edges = level.edges && solver && !level.exact && model.settings.solver_edge_contacts;
+  const bool solver_edges = level.edges && solver && model.settings.solver_edge_contacts;
+  const bool vertex_constraints = solver && level.exact && model.settings.solver_edge_contacts;
   if (exact_edges || solver_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
@@ -251,16 +252,16 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
       }
       case Stage::NarrowPhase: {
         double& depth = report.max_box_penetration_m;
-        if (solver && !level.exact) {
-          find_box_contacts(model, level, state, scratch, counters, depth);
+        if (solver && (!level.exact || vertex_constraints)) {
+          if (level.exact) find_vertex_constraints(model, state, scratch, counters, depth);
+          else find_box_contacts(model, level, state, scratch, counters, depth);
           if (solver_edges) {
             find_edge_contacts(model, level, state, scratch, counters, depth);
             // Its own pairs (levels 0-3) may overflow: grown between steps.
             if (scratch.pairs_dropped) report.hash_overflow = true;
           }
         } else if (level.exact) {
-          // The exact level answers its vertex contacts at once under either response (its
-          // points lie on triangles of other cells: docs/limits.md).
+          // Answered at once (without the solver's edge contacts also under the solver).
           if (friction) collide_surfaces<true>(model, state, scratch, counters, depth);
           else collide_surfaces<false>(model, state, scratch, counters, depth);
         } else {

@@ -43,11 +43,11 @@ void register_piles(CLI::App& app, PilesOptions& o) {
                 "Every pile with [simulation] edge_contacts = true, the default (levels 0-3: crossed surface edges sent "
                 "back, as at levels 4 and 5), or false");
   cmd->add_flag("--solver-edge-contacts", o.solver_edge_contacts,
-                "Every pile with [simulation] solver_edge_contacts = true (the response solver's edge contacts, levels "
-                "0-4)");
+                "Every pile with [simulation] solver_edge_contacts = true (the response solver's edge contacts, and "
+                "at level 5 its vertex contacts as constraints)");
   cmd->add_flag("--solver-substeps", o.solver_substeps,
-                "Every pile with [simulation] solver_substeps = true (the response solver's sweeps as substeps, levels "
-                "0-4)");
+                "Every pile with [simulation] solver_substeps = true (the response solver's sweeps as substeps; at "
+                "level 5 with --solver-edge-contacts)");
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");

@@ -162,14 +162,16 @@ struct SimulationSettings {
   // false is the paper's method as published (surfaces may stay crossed): its scenes of
   // several objects keep it.
   bool edge_contacts = true;
-  // Levels 0-4 under the response "solver", with edge_contacts: each edge crossing a triangle
-  // of another object as a constraint solved with the others (contact_solver.h). Asked for by
-  // name while a box resting on another still trembles with them (docs/limits.md).
+  // Under the response "solver", with edge_contacts: each edge crossing a triangle of another
+  // object as a constraint solved with the others (contact_solver.h), and at level 5 the
+  // surface vertices' contacts too (without, answered at once). Asked for by name while a box
+  // resting on another still trembles with them (docs/limits.md).
   bool solver_edge_contacts = false;
   // Under the response "solver": its sweeps as substeps of dt / sweeps (XPBD with small
   // steps, Macklin et al. 2019), each with its own prediction and the contacts' loads
   // carried over, instead of iterations of one step. A stiff lattice then holds its shape
-  // where a contact pushes a few of its nodes (docs/limits.md).
+  // where a contact pushes a few of its nodes (docs/limits.md). Not at level 5 without
+  // solver_edge_contacts, whose vertex contacts are then answered before the solve.
   bool solver_substeps = false;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within
