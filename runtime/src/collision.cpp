@@ -1199,8 +1199,11 @@ void collide_boxes(const Model& model, const BoxLevel& level, State& state, Coll
   if (level.edges) answer_crossed_edges<kFriction>(model, boxes, state, scratch, counters, max_depth);
 }
 
-template <bool kFriction>
-void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth) {
+// Level 5's candidate pairs, in order: on_pair(c1, c2, same_object) for each with an object
+// awake, after a moving object wakes a sleeper it meets; counts the pairs tested.
+template <class OnPair>
+void for_each_surface_pair(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters,
+                           const OnPair& on_pair) {
   const BoxSet& boxes = model.boxes;
   begin_surface_tests(scratch);
   for (Index p = 0; p < scratch.pair_count; ++p) {
@@ -1210,26 +1213,25 @@ void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch
     const bool same_object = model.cell_object[c1] == model.cell_object[c2];
     if (same_object) ++counters.self_pairs_tested;
     else ++counters.inter_pairs_tested;
+    on_pair(c1, c2, same_object);
+  }
+}
+
+template <bool kFriction>
+void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double& max_depth) {
+  for_each_surface_pair(model, state, scratch, counters, [&](Index c1, Index c2, bool same_object) {
     test_vertices<kFriction>(model, state, scratch, c1, c2, same_object, counters, max_depth);
     test_vertices<kFriction>(model, state, scratch, c2, c1, same_object, counters, max_depth);
     if (!same_object && state.params.response == ContactResponse::Paper) {  // test_edges says why
       test_edges<kFriction>(model, state, scratch, c1, c2, crossing_surface(model), counters, max_depth);
       test_edges<kFriction>(model, state, scratch, c2, c1, crossing_surface(model), counters, max_depth);
     }
-  }
+  });
 }
 
 void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double margin,
                           VertexContactSink& sink) {
-  const BoxSet& boxes = model.boxes;
-  begin_surface_tests(scratch);
-  for (Index p = 0; p < scratch.pair_count; ++p) {
-    const Index c1 = boxes.box_cell[scratch.pairs[p].a], c2 = boxes.box_cell[scratch.pairs[p].b];
-    if (state.asleep[model.cell_object[c1]] && state.asleep[model.cell_object[c2]]) continue;
-    if (sleeping(model)) meet(state, model.cell_object[c1], model.cell_object[c2]);
-    const bool same_object = model.cell_object[c1] == model.cell_object[c2];
-    if (same_object) ++counters.self_pairs_tested;
-    else ++counters.inter_pairs_tested;
+  for_each_surface_pair(model, state, scratch, counters, [&](Index c1, Index c2, bool same_object) {
     for (const auto& [cell_b, cell_a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
       double deepest = -margin;
       VertexContact contact;
@@ -1252,7 +1254,7 @@ void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scr
       contact.barycentric = {1.0 - v - w, v, w};
       sink.add(contact, same_object);
     }
-  }
+  });
 }
 
 template <bool kFriction>
