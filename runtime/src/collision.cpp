@@ -1251,7 +1251,7 @@ void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scr
       if (!(denominator > 0.0)) continue;  // a sliver: no point to carry
       const double v = std::clamp((d11 * d20 - d01 * d21) / denominator, 0.0, 1.0);
       const double w = std::clamp((d00 * d21 - d01 * d20) / denominator, 0.0, 1.0 - v);
-      contact.barycentric = {1.0 - v - w, v, w};
+      contact.barycentric = Vec3(1.0 - v - w, v, w);
       sink.add(contact, same_object);
     }
   });

@@ -238,7 +238,7 @@ struct VertexContact {
   Vec3 normal = Vec3::Zero();   // unit, the triangle's, out of its surface
   double depth = 0.0;           // m, the push along the normal that puts the vertex the skin in front
   bool inside = false;          // behind the surface (else within the skin or `margin` before it)
-  std::array<double, 3> barycentric{};  // of `closest` on the triangle's corners
+  Vec3 barycentric = Vec3::Zero();  // of `closest` on the triangle's corners
 };
 class VertexContactSink {
  public:

@@ -73,6 +73,12 @@ bool surface_point(const Model& model, Index near, const Vec3& rest, ContactSide
   return true;
 }
 
+bool triangle_point(const Model& model, Index triangle, const Vec3& barycentric, ContactSide& side) {
+  const std::array<Index, 3>& tri = model.surface_triangles[triangle];
+  const auto rest = [&](int k) -> const Vec3& { return model.surface_vertex_rest[tri[k]]; };
+  return surface_point(model, tri[0], barycentric[0] * rest(0) + barycentric[1] * rest(1) + barycentric[2] * rest(2), side);
+}
+
 ContactSide probe_point() {
   ContactSide side;
   side.node.fill(kNoIndex);

@@ -41,6 +41,9 @@ ContactSide face_point(const Model& model, const BoxSet& boxes, Index b, int fac
 // (eq. 1 and 2): a point on an edge or a triangle that vertex belongs to. False where no cell
 // of the object's lattice holds it.
 bool surface_point(const Model& model, Index near, const Vec3& rest, ContactSide& side);
+// The point of surface triangle `triangle` at `barycentric` (its corners' weights), carried
+// so (surface_point).
+bool triangle_point(const Model& model, Index triangle, const Vec3& barycentric, ContactSide& side);
 ContactSide probe_point();
 ContactSide static_side();  // a plane: nothing moves
 

@@ -358,12 +358,9 @@ void find_vertex_constraints(const Model& model, State& state, StepMemory& scrat
     Sink(const Bodies& b, StepMemory& s, StageCounters& c, double& d) : bodies(b), scratch(s), counters(c), max_depth(d) {}
     void add(const VertexContact& contact, bool self) override {
       const Model& model = bodies.model;
-      const std::array<Index, 3>& tri = model.surface_triangles[contact.triangle];
-      Vec3 rest = Vec3::Zero();
-      for (int k = 0; k < 3; ++k) rest += contact.barycentric[k] * model.surface_vertex_rest[tri[k]];
       ContactRecord r;
       r.b = vertex_point(model, contact.vertex);
-      if (!surface_point(model, tri[0], rest, r.a)) return;
+      if (!triangle_point(model, contact.triangle, contact.barycentric, r.a)) return;
       if ((bodies.point(r.a) - contact.closest).norm() > kSpeculativeDistance) return;
       r.normal = contact.normal;
       r.depth = contact.depth;
@@ -387,11 +384,8 @@ namespace {
 // the cell that holds it at rest. False where no cell holds one.
 bool edge_contact_sides(const Model& model, const EdgeHold& e, ContactRecord& r) {
   const auto rest = [&](Index v) -> const Vec3& { return model.surface_vertex_rest[v]; };
-  const std::array<Index, 3>& tri = model.surface_triangles[e.triangle];
   const Vec3 on_edge = (1.0 - e.along) * rest(e.edge[0]) + e.along * rest(e.edge[1]);
-  const Vec3 on_triangle =
-      e.barycentric[0] * rest(tri[0]) + e.barycentric[1] * rest(tri[1]) + e.barycentric[2] * rest(tri[2]);
-  return surface_point(model, e.edge[0], on_edge, r.b) && surface_point(model, tri[0], on_triangle, r.a);
+  return surface_point(model, e.edge[0], on_edge, r.b) && triangle_point(model, e.triangle, e.barycentric, r.a);
 }
 
 // Whether an edge contact's points are within the speculative distance: apart along its
