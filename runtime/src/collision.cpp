@@ -267,8 +267,11 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
     const Vec3& q = cached_vertex(model, state, scratch, model.cell_owned_edges[e][1]);
     lo_all = lo_all.cwiseMin(p).cwiseMin(q);
     hi_all = hi_all.cwiseMax(p).cwiseMax(q);
-    cache.edge_min[e] = p.cwiseMin(q);
-    cache.edge_max[e] = p.cwiseMax(q);
+    const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
+    for (int axis = 0; axis < 3; ++axis) {
+      cache.edge_lo[axis][e] = lo[axis];
+      cache.edge_hi[axis][e] = hi[axis];
+    }
   }
   cache.edges_lo[cell] = lo_all;
   cache.edges_hi[cell] = hi_all;
@@ -546,19 +549,21 @@ void test_vertices(const Model& model, State& state, CollisionMemory& scratch, I
 // the plane through a, b, c that (b - a) x (c - a) points to.
 double orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return triangle_face(a, b, c).dot(d - a); }
 
-// The open segment pq passes through triangle abc: its ends strictly on opposite sides of the
-// plane, and the line through them inside the triangle (edges included). A segment touching
-// the plane, or lying in it, does not count.
-// `face`: triangle_face(a, b, c), which orient(a, b, c, .) takes the dot product with, so that
-// a triangle tested against many segments has it computed once (OwnedSurfaceCache::face).
-bool segment_crosses_face(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& face) {
-  const double sp = face.dot(p - a), sq = face.dot(q - a);
-  if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
+// The line through p and q passes through triangle abc (edges included).
+bool line_through_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
   const double u = orient(p, q, a, b), v = orient(p, q, b, c), w = orient(p, q, c, a);
   return (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0);
 }
+
+// The open segment pq passes through triangle abc: its ends strictly on opposite sides of the
+// plane (plane_height, which the edge tests' filter triangles_straddled computes likewise), and
+// the line through them inside the triangle (edges included). A segment touching the plane, or
+// lying in it, does not count.
 bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  return segment_crosses_face(p, q, a, b, c, triangle_face(a, b, c));
+  const Vec3 face = triangle_face(a, b, c);
+  const double sp = plane_height(face, a, p), sq = plane_height(face, a, q);
+  if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
+  return line_through_triangle(p, q, a, b, c);
 }
 
 // How an edge pq that crosses triangle abc now, and did not at the start of the step (p0 q0,
@@ -696,8 +701,9 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   const Vec3* triangle_min = scratch.triangle_min.data();
   const Vec3* triangle_max = scratch.triangle_max.data();
   const Vec3* faces = nullptr;
-  const Vec3* edge_min = nullptr;
-  const Vec3* edge_max = nullptr;
+  const Index edge_count = edge_end - edge_begin;
+  BoxColumns edge_boxes{{memory.edge_lo[0].data(), memory.edge_lo[1].data(), memory.edge_lo[2].data()},
+                        {memory.edge_hi[0].data(), memory.edge_hi[1].data(), memory.edge_hi[2].data()}};
   if (surface.crossing) {
     cell_triangle_bounds(model, state, scratch, cell_a, reach_lo, reach_hi);
     cell_triangle_bounds(model, state, scratch, cell_b, edges_lo, edges_hi);
@@ -710,8 +716,10 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
     triangle_min = cache.triangle_min.data() + tri_begin;
     triangle_max = cache.triangle_max.data() + tri_begin;
     faces = cache.face.data() + tri_begin;
-    edge_min = cache.edge_min.data() + edge_begin;
-    edge_max = cache.edge_max.data() + edge_begin;
+    for (int axis = 0; axis < 3; ++axis) {
+      edge_boxes.lo[axis] = cache.edge_lo[axis].data() + edge_begin;
+      edge_boxes.hi[axis] = cache.edge_hi[axis].data() + edge_begin;
+    }
     reach_lo = cache.triangles_lo[cell_a];
     reach_hi = cache.triangles_hi[cell_a];
     edges_lo = cache.edges_lo[cell_b];
@@ -731,45 +739,59 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
                                                   (triangle_min[t].array() > reach_hi.array()).any()));
   }
   if (candidates == 0) return deepest;
-  // Their AABBs as columns: each edge's box filter (boxes_meeting) tests a vector of them at once.
+  // Their AABBs, faces and first corners as columns: each edge's filter (triangles_straddled)
+  // tests a vector of them at once, box and plane.
   for (Index c = 0; c < candidates; ++c) {
     const Index t = near[c];
+    const Vec3* corner = corners + 3 * std::size_t{t};
+    const Vec3 face = faces ? faces[t] : triangle_face(corner[0], corner[1], corner[2]);
     for (int axis = 0; axis < 3; ++axis) {
       memory.lo[axis][c] = triangle_min[t][axis];
       memory.hi[axis][c] = triangle_max[t][axis];
+      memory.face[axis][c] = face[axis];
+      memory.corner[axis][c] = corner[0][axis];
     }
   }
-  const BoxColumns candidate_boxes{{memory.lo[0].data(), memory.lo[1].data(), memory.lo[2].data()},
-                                   {memory.hi[0].data(), memory.hi[1].data(), memory.hi[2].data()}};
-  Index* __restrict hits = memory.hits.data();
-  for (Index e = edge_begin; e < edge_end; ++e) {
-    const std::array<Index, 2>& edge = surface.edges[e];
-    Vec3 lo, hi;
-    if (edge_min) {
-      lo = edge_min[e - edge_begin];
-      hi = edge_max[e - edge_begin];
-    } else {
+  const TriangleColumns candidate_triangles{
+      {{memory.lo[0].data(), memory.lo[1].data(), memory.lo[2].data()},
+       {memory.hi[0].data(), memory.hi[1].data(), memory.hi[2].data()}},
+      {memory.face[0].data(), memory.face[1].data(), memory.face[2].data()},
+      {memory.corner[0].data(), memory.corner[1].data(), memory.corner[2].data()}};
+  // cell_b's edges whose AABB meets the region (levels 4 and 5: their bounds loaded here).
+  if (surface.crossing)
+    for (Index i = 0; i < edge_count; ++i) {
+      const std::array<Index, 2>& edge = surface.edges[edge_begin + i];
       const Vec3& p = cached_vertex(model, state, scratch, edge[0]);
       const Vec3& q = cached_vertex(model, state, scratch, edge[1]);
-      lo = p.cwiseMin(q);
-      hi = p.cwiseMax(q);
+      const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
+      for (int axis = 0; axis < 3; ++axis) {
+        memory.edge_lo[axis][i] = lo[axis];
+        memory.edge_hi[axis][i] = hi[axis];
+      }
     }
-    // (A NaN compares false both ways: such an edge is tested, and crosses nothing.)
-    if ((hi.array() < reach_lo.array()).any() || (lo.array() > reach_hi.array()).any()) continue;
+  // (A NaN compares false both ways: such an edge is tested, and crosses nothing.)
+  Index* __restrict reaching = memory.edges.data();
+  const Index reaching_count = boxes_meeting(edge_boxes, edge_count, reach_lo, reach_hi, reaching);
+  Index* __restrict hits = memory.hits.data();
+  for (Index k = 0; k < reaching_count; ++k) {
+    const Index i = reaching[k];
+    const std::array<Index, 2>& edge = surface.edges[edge_begin + i];
+    const Vec3 lo(edge_boxes.lo[0][i], edge_boxes.lo[1][i], edge_boxes.lo[2][i]);
+    const Vec3 hi(edge_boxes.hi[0][i], edge_boxes.hi[1][i], edge_boxes.hi[2][i]);
     const Vec3 p = cached_vertex(model, state, scratch, edge[0]);
     const Vec3 q = cached_vertex(model, state, scratch, edge[1]);
     counters.node_tests += candidates;
-    const Index hit_count = boxes_meeting(candidate_boxes, candidates, lo, hi, hits);
+    // The triangles whose box meets the edge's and whose plane it passes through
+    // (segment_crosses_triangle's first test).
+    const Index hit_count = triangles_straddled(candidate_triangles, candidates, p, q, lo, hi, hits);
     for (Index h = 0; h < hit_count; ++h) {
       const Index t = near[hits[h]];
       const Index triangle = surface.triangles[tri_begin + t];
       const std::array<Index, 3>& tri = model.surface_triangles[triangle];
       const Vec3 now[5] = {p, q, corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
-      if (!(faces ? segment_crosses_face(p, q, now[2], now[3], now[4], faces[t])
-                  : segment_crosses_triangle(p, q, now[2], now[3], now[4])))
-        continue;
+      if (!line_through_triangle(p, q, now[2], now[3], now[4])) continue;
       // A face lying on a face (kTangentEdgeSine): the paper's answer is held to the skin.
-      const Vec3 plane = faces ? faces[t] : triangle_face(now[2], now[3], now[4]);
+      const Vec3 plane(memory.face[0][hits[h]], memory.face[1][hits[h]], memory.face[2][hits[h]]);
       const bool tangent = !least && std::abs(plane.dot(q - p)) < kTangentEdgeSine * plane.norm() * (q - p).norm();
       const std::vector<Vec3>& x0 = scratch.x_start;
       const Vec3 start[5] = {surface_vertex(model, x0, edge[0]), surface_vertex(model, x0, edge[1]),

@@ -41,7 +41,7 @@ struct OwnedSurfaceCache {
   std::vector<Vec3> corners;                     // 3 per owned triangle
   std::vector<Vec3> triangle_min, triangle_max;  // per owned triangle
   std::vector<Vec3> face;                        // per owned triangle: (b - a) x (c - a) of its corners
-  std::vector<Vec3> edge_min, edge_max;          // per owned edge
+  std::array<std::vector<double>, 3> edge_lo, edge_hi;  // per owned edge, as BoxColumns
   std::vector<Vec3> triangles_lo, triangles_hi;  // (C)
   std::vector<Vec3> edges_lo, edges_hi;          // (C)
   std::vector<std::uint8_t> finite;              // (C) every corner finite
@@ -108,14 +108,21 @@ struct NarrowMemory {
   // most triangles a cell has: a cell's candidate triangles, their AABBs as columns for the
   // box filter's SIMD kernel, and those an edge's AABB meets (indices into the candidates).
   struct EdgeTestMemory {
-    std::vector<Index> candidates, hits;
-    std::array<std::vector<double>, 3> lo, hi;
-    void resize(std::size_t most_triangles) {
+    std::vector<Index> candidates, hits;                      // triangles
+    std::array<std::vector<double>, 3> lo, hi, face, corner;  // TriangleColumns
+    std::vector<Index> edges;                                 // those in reach
+    std::array<std::vector<double>, 3> edge_lo, edge_hi;      // BoxColumns (levels 4 and 5)
+    void resize(std::size_t most_triangles, std::size_t most_edges) {
       candidates.resize(most_triangles);
       hits.resize(most_triangles);
+      edges.resize(most_edges);
       for (int axis = 0; axis < 3; ++axis) {
         lo[axis].resize(most_triangles);
         hi[axis].resize(most_triangles);
+        face[axis].resize(most_triangles);
+        corner[axis].resize(most_triangles);
+        edge_lo[axis].resize(most_edges);
+        edge_hi[axis].resize(most_edges);
       }
     }
   };

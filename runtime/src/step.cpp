@@ -80,16 +80,23 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
     s.triangle_lo[k].resize(most_triangles);
     s.triangle_hi[k].resize(most_triangles);
   }
+  std::size_t most_edges = 0;
+  for (Index c = 0; c + 1 < model.cell_edge_begin.size(); ++c)
+    most_edges = std::max<std::size_t>(most_edges, model.cell_edge_begin[c + 1] - model.cell_edge_begin[c]);
+  for (Index c = 0; c + 1 < model.cell_owned_edge_begin.size(); ++c)
+    most_edges = std::max<std::size_t>(most_edges, model.cell_owned_edge_begin[c + 1] - model.cell_owned_edge_begin[c]);
   s.triangle_near.resize(most_triangles);
-  s.edge_tests.resize(most_triangles);
+  s.edge_tests.resize(most_triangles, most_edges);
   s.edge_cell_in_pair.assign(model.cell_count(), 0);
   OwnedSurfaceCache& owned = s.owned_cache;
   owned.corners.resize(3 * model.cell_owned_triangles.size());
   owned.triangle_min.resize(model.cell_owned_triangles.size());
   owned.triangle_max.resize(model.cell_owned_triangles.size());
   owned.face.resize(model.cell_owned_triangles.size());
-  owned.edge_min.resize(model.cell_owned_edges.size());
-  owned.edge_max.resize(model.cell_owned_edges.size());
+  for (int axis = 0; axis < 3; ++axis) {
+    owned.edge_lo[axis].resize(model.cell_owned_edges.size());
+    owned.edge_hi[axis].resize(model.cell_owned_edges.size());
+  }
   for (std::vector<Vec3>* v : {&owned.triangles_lo, &owned.triangles_hi, &owned.edges_lo, &owned.edges_hi})
     v->resize(model.cell_count());
   owned.finite.assign(model.cell_count(), 0);
@@ -161,7 +168,7 @@ void attach_pool(const Model& model, Scratch& scratch, WorkerPool& pool) {
   memory.narrow_workspaces.resize(threads);
   for (NarrowMemory::NarrowWorkspace& w : memory.narrow_workspaces) {
     w.contacts.resize(memory.contacts.size());
-    w.edge_tests.resize(memory.triangle_near.size());
+    w.edge_tests.resize(memory.triangle_near.size(), memory.edge_tests.edges.size());
   }
   size_pair_answers(memory);
 }
