@@ -252,10 +252,15 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
   for (Index i = model.cell_owned_triangle_begin[cell]; i < model.cell_owned_triangle_begin[cell + 1]; ++i) {
     const std::array<Index, 3>& tri = model.surface_triangles[model.cell_owned_triangles[i]];
     Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
-    finite = load_triangle(model, state, scratch, tri, corner, cache.triangle_min[i], cache.triangle_max[i]) && finite;
+    Vec3 lo, hi;
+    finite = load_triangle(model, state, scratch, tri, corner, lo, hi) && finite;
+    for (int axis = 0; axis < 3; ++axis) {
+      cache.triangle_lo[axis][i] = lo[axis];
+      cache.triangle_hi[axis][i] = hi[axis];
+    }
     cache.face[i] = triangle_face(corner[0], corner[1], corner[2]);
-    lo_all = lo_all.cwiseMin(cache.triangle_min[i]);
-    hi_all = hi_all.cwiseMax(cache.triangle_max[i]);
+    lo_all = lo_all.cwiseMin(lo);
+    hi_all = hi_all.cwiseMax(hi);
   }
   cache.triangles_lo[cell] = lo_all;
   cache.triangles_hi[cell] = hi_all;
@@ -698,8 +703,8 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // cell_a's triangles (corners, AABBs) and cell_b's edges' AABBs: levels 0-3's owned
   // surfaces from the per-cell cache, levels 4 and 5's crossing triangles loaded for this pair.
   const Vec3* corners = scratch.triangle_corners.data();
-  const Vec3* triangle_min = scratch.triangle_min.data();
-  const Vec3* triangle_max = scratch.triangle_max.data();
+  BoxColumns triangle_boxes{{scratch.triangle_lo[0].data(), scratch.triangle_lo[1].data(), scratch.triangle_lo[2].data()},
+                            {scratch.triangle_hi[0].data(), scratch.triangle_hi[1].data(), scratch.triangle_hi[2].data()}};
   const Vec3* faces = nullptr;
   const Index edge_count = edge_end - edge_begin;
   BoxColumns edge_boxes{{memory.edge_lo[0].data(), memory.edge_lo[1].data(), memory.edge_lo[2].data()},
@@ -713,8 +718,10 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
     refresh_owned_surface(model, state, scratch, cell_b);
     corners_finite = cache.finite[cell_a] != 0;
     corners = cache.corners.data() + 3 * std::size_t{tri_begin};
-    triangle_min = cache.triangle_min.data() + tri_begin;
-    triangle_max = cache.triangle_max.data() + tri_begin;
+    for (int axis = 0; axis < 3; ++axis) {
+      triangle_boxes.lo[axis] = cache.triangle_lo[axis].data() + tri_begin;
+      triangle_boxes.hi[axis] = cache.triangle_hi[axis].data() + tri_begin;
+    }
     faces = cache.face.data() + tri_begin;
     for (int axis = 0; axis < 3; ++axis) {
       edge_boxes.lo[axis] = cache.edge_lo[axis].data() + edge_begin;
@@ -732,12 +739,11 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   if (surface.crossing) corners_finite = load_triangles(model, state, scratch, cell_a, surface);
   const bool finite = corners_finite && is_finite(reach_lo) && is_finite(reach_hi);
   Index* __restrict near = memory.candidates.data();
-  Index candidates = 0;
-  for (Index t = 0; t < tri_count; ++t) {
-    near[candidates] = t;
-    candidates += static_cast<Index>(!finite || !((triangle_max[t].array() < reach_lo.array()).any() ||
-                                                  (triangle_min[t].array() > reach_hi.array()).any()));
-  }
+  Index candidates = tri_count;
+  if (finite)
+    candidates = boxes_meeting(triangle_boxes, tri_count, reach_lo, reach_hi, near);
+  else
+    for (Index t = 0; t < tri_count; ++t) near[t] = t;
   if (candidates == 0) return deepest;
   // Their AABBs, faces and first corners as columns: each edge's filter (triangles_straddled)
   // tests a vector of them at once, box and plane.
@@ -746,8 +752,8 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
     const Vec3* corner = corners + 3 * std::size_t{t};
     const Vec3 face = faces ? faces[t] : triangle_face(corner[0], corner[1], corner[2]);
     for (int axis = 0; axis < 3; ++axis) {
-      memory.lo[axis][c] = triangle_min[t][axis];
-      memory.hi[axis][c] = triangle_max[t][axis];
+      memory.lo[axis][c] = triangle_boxes.lo[axis][t];
+      memory.hi[axis][c] = triangle_boxes.hi[axis][t];
       memory.face[axis][c] = face[axis];
       memory.corner[axis][c] = corner[0][axis];
     }

@@ -38,14 +38,14 @@ struct EdgeCrossing {
 // cell meets many others in a step, and reloading its surface for every pair was most of
 // the edge tests' work.
 struct OwnedSurfaceCache {
-  std::vector<Vec3> corners;                     // 3 per owned triangle
-  std::vector<Vec3> triangle_min, triangle_max;  // per owned triangle
-  std::vector<Vec3> face;                        // per owned triangle: (b - a) x (c - a) of its corners
+  std::vector<Vec3> corners;                                    // 3 per owned triangle
+  std::array<std::vector<double>, 3> triangle_lo, triangle_hi;  // per owned triangle, as BoxColumns
+  std::vector<Vec3> face;                               // per owned triangle: (b - a) x (c - a) of its corners
   std::array<std::vector<double>, 3> edge_lo, edge_hi;  // per owned edge, as BoxColumns
-  std::vector<Vec3> triangles_lo, triangles_hi;  // (C)
-  std::vector<Vec3> edges_lo, edges_hi;          // (C)
-  std::vector<std::uint8_t> finite;              // (C) every corner finite
-  std::vector<std::uint64_t> stamp;              // (C) 0: never filled
+  std::vector<Vec3> triangles_lo, triangles_hi;         // (C)
+  std::vector<Vec3> edges_lo, edges_hi;                 // (C)
+  std::vector<std::uint8_t> finite;                     // (C) every corner finite
+  std::vector<std::uint64_t> stamp;                     // (C) 0: never filled
 };
 
 // The narrow phase's working memory (collision.cpp).

@@ -90,10 +90,10 @@ void size_narrow_memory(const Model& model, NarrowMemory& s) {
   s.edge_cell_in_pair.assign(model.cell_count(), 0);
   OwnedSurfaceCache& owned = s.owned_cache;
   owned.corners.resize(3 * model.cell_owned_triangles.size());
-  owned.triangle_min.resize(model.cell_owned_triangles.size());
-  owned.triangle_max.resize(model.cell_owned_triangles.size());
   owned.face.resize(model.cell_owned_triangles.size());
   for (int axis = 0; axis < 3; ++axis) {
+    owned.triangle_lo[axis].resize(model.cell_owned_triangles.size());
+    owned.triangle_hi[axis].resize(model.cell_owned_triangles.size());
     owned.edge_lo[axis].resize(model.cell_owned_edges.size());
     owned.edge_hi[axis].resize(model.cell_owned_edges.size());
   }
