@@ -208,6 +208,29 @@ TEST_CASE("Determinism: the baseline SIMD target and the best one give the same 
   }
 }
 
+// Checks that kernel(count, p, q) keeps what scalar(count, p, q) keeps, in order, on every
+// SIMD target, for every count up to `most` (tails included) and 12 edges pq on a coarse grid,
+// q = p + step(e), the last with a NaN end. Returns how many the scalar test kept in all.
+template <class Scalar, class Kernel, class Step>
+std::size_t check_filter_on_every_target(Index most, const Scalar& scalar, const Kernel& kernel, const Step& step) {
+  std::size_t found = 0;
+  test::FpTrapsOff no_traps;  // a NaN compares false, as the filters rely on
+  for (const std::int64_t targets : hwy::SupportedAndGeneratedTargets()) {
+    for (Index count = 0; count <= most; ++count) {
+      for (int e = 0; e < 12; ++e) {
+        const Vec3 p(std::floor(3.0 * std::sin(0.8 * e)), std::floor(3.0 * std::cos(1.1 * e)), std::floor(2.0 * std::sin(2.3 * e)));
+        Vec3 q = p + step(e);
+        if (e == 11) q.y() = NAN;
+        const std::vector<Index> expected = scalar(count, p, q);
+        INFO("target " << hwy::TargetName(targets) << ", " << count << " of " << most << ", edge " << e);
+        REQUIRE(with_targets(targets, [&] { return kernel(count, p, q); }) == expected);
+        found += expected.size();
+      }
+    }
+  }
+  return found;
+}
+
 TEST_CASE("Determinism: the edge tests' box filter finds what the scalar test finds, in order, on every SIMD target",
           "[determinism]") {
   // Boxes on a coarse grid, so that many touch the edge's box exactly (a shared bound meets),
@@ -238,21 +261,8 @@ TEST_CASE("Determinism: the edge tests' box filter finds what the scalar test fi
     hits.resize(boxes_meeting(boxes, count, a, b, hits.data()));
     return hits;
   };
-  std::size_t found = 0;
-  test::FpTrapsOff no_traps;  // a NaN compares false, as the filter relies on
-  for (const std::int64_t targets : hwy::SupportedAndGeneratedTargets()) {
-    for (Index count = 0; count <= kBoxes; ++count) {
-      for (int e = 0; e < 12; ++e) {
-        Vec3 a(std::floor(3.0 * std::sin(0.8 * e)), std::floor(3.0 * std::cos(1.1 * e)), std::floor(2.0 * std::sin(2.3 * e)));
-        Vec3 b = a + Vec3::Constant(e % 3);
-        if (e == 11) b.y() = NAN;  // an edge with a NaN end meets every box
-        const std::vector<Index> expected = scalar(count, a, b);
-        INFO("target " << hwy::TargetName(targets) << ", " << count << " boxes, edge " << e);
-        REQUIRE(with_targets(targets, [&] { return kernel(count, a, b); }) == expected);
-        found += expected.size();
-      }
-    }
-  }
+  // An edge with a NaN end meets every box.
+  const std::size_t found = check_filter_on_every_target(kBoxes, scalar, kernel, [](int e) { return Vec3::Constant(e % 3); });
   CHECK(found > 0);  // the boxes met some edges
 }
 
@@ -295,21 +305,9 @@ TEST_CASE("Determinism: the edge tests' triangle filter finds what the scalar te
     hits.resize(triangles_straddled(triangles, count, p, q, p.cwiseMin(q), p.cwiseMax(q), hits.data()));
     return hits;
   };
-  std::size_t found = 0;
-  test::FpTrapsOff no_traps;  // a NaN compares false, as the filter relies on
-  for (const std::int64_t targets : hwy::SupportedAndGeneratedTargets()) {
-    for (Index count = 0; count <= kTriangles; ++count) {
-      for (int e = 0; e < 12; ++e) {
-        const Vec3 p(std::floor(3.0 * std::sin(0.8 * e)), std::floor(3.0 * std::cos(1.1 * e)), std::floor(2.0 * std::sin(2.3 * e)));
-        Vec3 q = p + Vec3(e % 3, 2 - e % 2, (e % 4) - 1.5);
-        if (e == 11) q.y() = NAN;  // an edge with a NaN end crosses nothing
-        const std::vector<Index> expected = scalar(count, p, q);
-        INFO("target " << hwy::TargetName(targets) << ", " << count << " triangles, edge " << e);
-        REQUIRE(with_targets(targets, [&] { return kernel(count, p, q); }) == expected);
-        found += expected.size();
-      }
-    }
-  }
+  // An edge with a NaN end crosses nothing.
+  const std::size_t found = check_filter_on_every_target(kTriangles, scalar, kernel,
+                                                         [](int e) { return Vec3(e % 3, 2 - e % 2, (e % 4) - 1.5); });
   CHECK(found > 0);  // some edges passed through some planes
 }
 
