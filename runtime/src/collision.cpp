@@ -241,6 +241,15 @@ bool load_triangle(const Model& model, const State& state, CollisionMemory& scra
   return finite;
 }
 
+// Box i of the columns (lo, hi) (BoxColumns' layout) set to [l, h].
+void set_column_box(std::array<std::vector<double>, 3>& lo, std::array<std::vector<double>, 3>& hi, std::size_t i,
+                    const Vec3& l, const Vec3& h) {
+  for (int axis = 0; axis < 3; ++axis) {
+    lo[axis][i] = l[axis];
+    hi[axis][i] = h[axis];
+  }
+}
+
 // Levels 0-3's edge tests: brings cell's entry of the owned-surface cache (NarrowMemory::
 // owned_cache) up to the lattice as it is now, unless it was filled at this surface epoch.
 // The same values, in the same order, as loading them for each pair.
@@ -254,10 +263,7 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
     Vec3* corner = cache.corners.data() + 3 * std::size_t{i};
     Vec3 lo, hi;
     finite = load_triangle(model, state, scratch, tri, corner, lo, hi) && finite;
-    for (int axis = 0; axis < 3; ++axis) {
-      cache.triangle_lo[axis][i] = lo[axis];
-      cache.triangle_hi[axis][i] = hi[axis];
-    }
+    set_column_box(cache.triangle_lo, cache.triangle_hi, i, lo, hi);
     cache.face[i] = triangle_face(corner[0], corner[1], corner[2]);
     lo_all = lo_all.cwiseMin(lo);
     hi_all = hi_all.cwiseMax(hi);
@@ -272,11 +278,7 @@ void refresh_owned_surface(const Model& model, const State& state, CollisionMemo
     const Vec3& q = cached_vertex(model, state, scratch, model.cell_owned_edges[e][1]);
     lo_all = lo_all.cwiseMin(p).cwiseMin(q);
     hi_all = hi_all.cwiseMax(p).cwiseMax(q);
-    const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
-    for (int axis = 0; axis < 3; ++axis) {
-      cache.edge_lo[axis][e] = lo[axis];
-      cache.edge_hi[axis][e] = hi[axis];
-    }
+    set_column_box(cache.edge_lo, cache.edge_hi, e, p.cwiseMin(q), p.cwiseMax(q));
   }
   cache.edges_lo[cell] = lo_all;
   cache.edges_hi[cell] = hi_all;
@@ -417,10 +419,7 @@ bool load_triangles(const Model& model, const State& state, CollisionMemory& scr
     finite = load_triangle(model, state, scratch, tri, corners + 3 * t, lo, hi) && finite;
     scratch.triangle_min[t] = lo;
     scratch.triangle_max[t] = hi;
-    for (int k = 0; k < 3; ++k) {
-      scratch.triangle_lo[k][t] = lo[k];
-      scratch.triangle_hi[k][t] = hi[k];
-    }
+    set_column_box(scratch.triangle_lo, scratch.triangle_hi, t, lo, hi);
   }
   return finite;
 }
@@ -769,11 +768,7 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
       const std::array<Index, 2>& edge = surface.edges[edge_begin + i];
       const Vec3& p = cached_vertex(model, state, scratch, edge[0]);
       const Vec3& q = cached_vertex(model, state, scratch, edge[1]);
-      const Vec3 lo = p.cwiseMin(q), hi = p.cwiseMax(q);
-      for (int axis = 0; axis < 3; ++axis) {
-        memory.edge_lo[axis][i] = lo[axis];
-        memory.edge_hi[axis][i] = hi[axis];
-      }
+      set_column_box(memory.edge_lo, memory.edge_hi, i, p.cwiseMin(q), p.cwiseMax(q));
     }
   // (A NaN compares false both ways: such an edge is tested, and crosses nothing.)
   Index* __restrict reaching = memory.edges.data();

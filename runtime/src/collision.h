@@ -104,9 +104,11 @@ struct NarrowMemory {
   std::vector<Vec3> triangle_min, triangle_max;
   std::array<std::vector<double>, 3> triangle_lo, triangle_hi;
   std::vector<Index> triangle_near;  // the triangles one vertex may lie within the contact radius of
-  // One thread's working memory of the edge tests (deepest_edge_crossing), each sized for the
-  // most triangles a cell has: a cell's candidate triangles, their AABBs as columns for the
-  // box filter's SIMD kernel, and those an edge's AABB meets (indices into the candidates).
+  // One thread's working memory of the edge tests (deepest_edge_crossing), sized for the most
+  // triangles and edges a cell has: a cell's candidate triangles, their AABBs, faces and
+  // corners as columns for the triangle filter's SIMD kernel, and those an edge passes the
+  // filter of (indices into the candidates); the cell's edges in reach of the other, and at
+  // levels 4 and 5 their AABBs as columns.
   struct EdgeTestMemory {
     std::vector<Index> candidates, hits;                      // triangles
     std::array<std::vector<double>, 3> lo, hi, face, corner;  // TriangleColumns

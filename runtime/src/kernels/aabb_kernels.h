@@ -1,10 +1,10 @@
 #pragma once
 // SIMD kernels of the edge tests' filters (deepest_edge_crossing): which of a cell's edges
-// have an AABB that meets a region, and which of its candidate triangles have an AABB that
-// meets an edge's and a plane the edge passes through. Each
-// lane does the scalar test's operations in the scalar test's order (no fused multiply-add:
-// -ffp-contract=off, and no MulAdd here), so every SIMD target finds the same triangles, in
-// the same order, as the scalar test.
+// and triangles have an AABB that meets a region, and which candidate triangles have an AABB
+// that meets an edge's and a plane the edge passes through. Each lane does the scalar test's
+// operations in the scalar test's order (no fused multiply-add: -ffp-contract=off, and no
+// MulAdd here), so every SIMD target keeps the same ones, in the same order, as the scalar
+// test.
 #include <array>
 
 #include "ffd/model.h"
