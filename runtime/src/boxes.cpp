@@ -13,15 +13,18 @@ BoxLevel box_level(const Model& model, Accuracy accuracy) {
   // any level (its objects, if several, do not collide with each other at all).
   const bool between = has(model.settings.effects, Effect::InterCollision);
   const bool edges = between && model.settings.edge_contacts;  // levels 0-3: the scene's choice
+  // The solver's edges follow edge_contacts at every level, 4 and 5 too: a soft lattice at
+  // level 5 rests only with its vertex contacts answered at once (docs/limits.md), and a
+  // scene chooses that with edge_contacts = false.
   switch (accuracy) {
-    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, edges, skin};
-    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, edges, skin};
-    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, edges, skin};
-    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, edges, skin};
-    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, between, std::max(skin, model.sub_box_skin)};
-    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, between, skin};
+    case Accuracy::GridCells: return {&model.grid_boxes, 0, 8, false, false, edges, edges, skin};
+    case Accuracy::BoundaryNodes: return {&model.boxes, 0, 8, false, false, edges, edges, skin};
+    case Accuracy::CentreOfMass: return {&model.boxes, 0, 9, false, false, edges, edges, skin};
+    case Accuracy::SampleNodes: return {&model.boxes, 8, 9, true, false, edges, edges, skin};
+    case Accuracy::SubBoxes: return {&model.sub_boxes, 0, 9, false, false, between, edges, std::max(skin, model.sub_box_skin)};
+    case Accuracy::Exact: return {&model.boxes, 0, 9, false, true, between, edges, skin};
   }
-  return {&model.boxes, 0, 9, false, false, edges, skin};
+  return {&model.boxes, 0, 9, false, false, edges, edges, skin};
 }
 
 namespace {

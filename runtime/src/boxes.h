@@ -27,6 +27,10 @@ struct BoxLevel {
   // other object's triangles too (collision.cpp, test_edges), and the planes answered first
   // (step.cpp). The one place that decides it.
   bool edges;
+  // Under the response "solver": the same edges as constraints (contact_solver.h), and at
+  // level 5 the vertex contacts too (without, answered at once before the solve). Levels 0-5
+  // with edge_contacts in a scene with inter-collision.
+  bool solver_edges;
   // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
   // Model::box_skin ("box_overlap"; 0 when off), at level 4 the larger of it and
   // Model::sub_box_skin.

@@ -257,10 +257,10 @@ void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   scratch.constraints_dropped = false;
   for (std::size_t o = 0; o < model.objects.size(); ++o) scratch.object_solving[o] = !state.asleep[o];
   // Not where level 5's vertex contacts are answered at once in the narrow phase, before the
-  // solve (without solver_edge_contacts): substep 0's prediction from the step's start would
-  // undo those answers.
+  // solve (without the solver's edges, step.cpp): substep 0's prediction from the step's start
+  // would undo those answers.
   const bool substeps = model.settings.solver_substeps &&
-                        (state.params.accuracy != Accuracy::Exact || model.settings.solver_edge_contacts);
+                        (state.params.accuracy != Accuracy::Exact || box_level(model, state.params.accuracy).solver_edges);
   scratch.substeps = substeps ? dynamics_iterations(model) : 1;
   scratch.substep_gravity = substeps && has(model.settings.effects, Effect::Gravity) ? state.params.gravity : Vec3::Zero();
   predict_dynamics(model, state, scratch, scratch.pool);
@@ -341,7 +341,7 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   scratch.contacts_dropped += static_cast<std::uint32_t>(total[1] - scratch.contact_count);
 }
 
-// Level 5 with solver_edge_contacts: of each half of a pair of cells, the surface vertex
+// Level 5 with edge_contacts (BoxLevel::solver_edges): of each half of a pair of cells, the surface vertex
 // deepest inside the other's surface, or within the skin and the speculative distance in
 // front of it (find_vertex_contacts), becomes a constraint between the vertex and the closest
 // point of the closest triangle, carried by the cell that holds that point at rest, to go out
@@ -454,7 +454,7 @@ void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
 
 }  // namespace
 
-// The edge contacts ([simulation] solver_edge_contacts): each half of a pair of cells of two
+// The edge contacts ([simulation] edge_contacts, BoxLevel::solver_edges): each half of a pair of cells of two
 // objects whose deepest edge crossing (find_crossed_edges) becomes a constraint between the
 // point of the edge and the point of the triangle where they cross, each carried by the cell
 // that holds it at rest, the edge to go back along the crossing's normal by its depth and the

@@ -6,7 +6,7 @@
 //   BoxUpdate, BroadPhase
 //   NarrowPhase   node-in-box tests on x* (the paper's eq. 3-7, read-only): each node inside,
 //                 or within kSpeculativeDistance outside, becomes a ContactConstraint
-//                 (find_box_contacts); at level 5 with solver_edge_contacts, of each half
+//                 (find_box_contacts); at level 5 with edge_contacts, of each half
 //                 of a pair of cells the surface vertex deepest inside the other's surface
 //                 or near it, likewise (find_vertex_constraints; without, they are answered
 //                 at once, as the paper's response answers them)

@@ -204,11 +204,11 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
   const bool solver = state.params.response == ContactResponse::Solver &&
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
   // The exact edge contacts (BoxLevel::edges) read where the step started; under the solver
-  // where the scene asks, and then level 5's vertex contacts are constraints too (without,
-  // they are answered at once, as under the paper's response).
+  // they are constraints (BoxLevel::solver_edges), and so are level 5's vertex contacts where
+  // its edges are (without, they are answered at once, as under the paper's response).
   const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
-  const bool solver_edges = level.edges && solver && model.settings.solver_edge_contacts;
-  const bool vertex_constraints = solver && level.exact && model.settings.solver_edge_contacts;
+  const bool solver_edges = level.solver_edges && solver;
+  const bool vertex_constraints = solver_edges && level.exact;
   if (exact_edges || solver_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse

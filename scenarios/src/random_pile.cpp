@@ -112,7 +112,7 @@ std::string random_pile_scene(const PileOptions& o) {
       number(o.cell_size) + " m across,\n# dropped in a column into a box " + number(2.0 * half_width) +
       " m wide.\n\n[simulation]\ndt = 0.001\ngravity = [0.0, -9.81, 0.0]\nalpha = 1.0\nbeta = 0.5\nseed = " +
       std::to_string(o.seed) + (o.box_overlap ? "\nbox_overlap = true" : "") +
-      (o.edge_contacts ? "" : "\nedge_contacts = false") + (o.solver_edge_contacts ? "\nsolver_edge_contacts = true" : "") +
+      (o.edge_contacts ? "" : "\nedge_contacts = false") +
       (o.solver_substeps ? "\nsolver_substeps = true" : "") +
       "\neffects = [\"gravity\", \"planes\", \"inter_collision\", \"self_collision\", \"friction\", \"probe\", \"grab\"]\n"
       // The probe's proxy stays at its start until a device moves it: a cell clear above the

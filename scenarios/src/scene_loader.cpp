@@ -155,7 +155,11 @@ class SceneReader {
     settings.rolling_resistance = sim.number("rolling_resistance", settings.rolling_resistance, kNonNegative);
     settings.box_overlap = sim.boolean("box_overlap", settings.box_overlap);
     settings.edge_contacts = sim.boolean("edge_contacts", settings.edge_contacts);
-    settings.solver_edge_contacts = sim.boolean("solver_edge_contacts", settings.solver_edge_contacts);
+    // The solver's own switch for the edge contacts is gone: edge_contacts means the same under
+    // both responses.
+    if (sim.has("solver_edge_contacts"))
+      sim.fail_at("solver_edge_contacts", "solver_edge_contacts is no longer used: edge_contacts gives both responses "
+                                          "their edge contacts (remove the key; edge_contacts = false turns them off)");
     settings.solver_substeps = sim.boolean("solver_substeps", settings.solver_substeps);
     if (const std::optional<std::string> response = sim.string("response"))
       if (!response_from_name(*response, settings.response))

@@ -32,7 +32,6 @@ Model letter_on_plate(bool box_overlap, bool edge_contacts = false, ContactRespo
   options.edge_contacts = edge_contacts;
   SceneSpec spec = parse_scene(random_pile_scene(options), "pile_5.toml", "");
   spec.settings.response = response;
-  spec.settings.solver_edge_contacts = edge_contacts;  // the solver's are asked for by name
   REQUIRE(spec.settings.box_overlap == box_overlap);
   REQUIRE(spec.settings.edge_contacts == edge_contacts);
   std::vector<std::string> log;

@@ -406,6 +406,12 @@ TEST_CASE("scene value errors", "[scene_loader]") {
                   "inline.toml:2:19: simulation.hash_table_size: hash_table_size is no longer used: the broad phase sizes "
                   "its grids to the objects (remove the key; hash_cell_size still sets the grid cell edge)");
   }
+  SECTION("the solver's old edge switch") {
+    require_error("[simulation]\nsolver_edge_contacts = true\neffects = []\n",
+                  "inline.toml:2:24: simulation.solver_edge_contacts: solver_edge_contacts is no longer used: "
+                  "edge_contacts gives both responses their edge contacts (remove the key; edge_contacts = false "
+                  "turns them off)");
+  }
   SECTION("effects is not an array") {
     require_error("[simulation]\neffects = \"gravity\"\n",
                   "inline.toml:2:11: simulation.effects: expected an array of effect names (got a string)");

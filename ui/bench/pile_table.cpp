@@ -25,13 +25,10 @@ bool all_at_rest(const ffd::Model& model, const ffd::State& state) {
 }
 
 // A row's response as the table names it, by what differs from the defaults: "paper",
-// "paper + box_overlap", "paper without edge_contacts", "solver" (no edge contacts),
-// "solver + solver_edge_contacts", "solver + solver_edge_contacts + solver_substeps".
+// "paper + box_overlap", "solver without edge_contacts", "solver + solver_substeps".
 std::string response_label(ffd::ContactResponse response, bool box_overlap, bool edge_contacts, bool substeps) {
-  const bool paper = response == ffd::ContactResponse::Paper;
   return std::string(ffd::response_name(response)) + (box_overlap ? " + box_overlap" : "") +
-         (paper && !edge_contacts ? " without edge_contacts" : "") +
-         (!paper && edge_contacts ? " + solver_edge_contacts" : "") + (!paper && substeps ? " + solver_substeps" : "");
+         (edge_contacts ? "" : " without edge_contacts") + (substeps ? " + solver_substeps" : "");
 }
 
 }  // namespace
@@ -43,9 +40,7 @@ PileRun run_pile(const ffd::Model& model, std::uint64_t seed, ffd::Accuracy leve
   run.level = level;
   run.response = response;
   run.box_overlap = model.settings.box_overlap;
-  // The response's edge contacts ran (the solver's are asked for by name).
-  run.edge_contacts = model.settings.edge_contacts &&
-                      (response == ffd::ContactResponse::Paper || model.settings.solver_edge_contacts);
+  run.edge_contacts = model.settings.edge_contacts;
   run.substeps = response == ffd::ContactResponse::Solver && model.settings.solver_substeps;
   run.steps = steps;
   run.sample_every = sample_every;

@@ -130,7 +130,6 @@ struct PilesOptions {
   std::string scenes_dir;            // also write each pile's scene file here
   bool box_overlap = false;          // every pile with [simulation] box_overlap = true
   bool edge_contacts = true;         // every pile with [simulation] edge_contacts = true (the default)
-  bool solver_edge_contacts = false; // every pile with [simulation] solver_edge_contacts = true
   bool solver_substeps = false;      // every pile with [simulation] solver_substeps = true
   std::string results_page;          // --update-docs: the results page to write
   bool require_clean = false;        // exit 4 unless every pile ends clean

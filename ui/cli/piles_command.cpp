@@ -41,13 +41,10 @@ void register_piles(CLI::App& app, PilesOptions& o) {
                 "Every pile with [simulation] box_overlap = true (boxes of two objects kept apart as wholes)");
   cmd->add_flag("--edge-contacts,!--no-edge-contacts", o.edge_contacts,
                 "Every pile with [simulation] edge_contacts = true, the default (levels 0-3: crossed surface edges sent "
-                "back, as at levels 4 and 5), or false");
-  cmd->add_flag("--solver-edge-contacts", o.solver_edge_contacts,
-                "Every pile with [simulation] solver_edge_contacts = true (the response solver's edge contacts, and "
-                "at level 5 its vertex contacts as constraints)");
+                "back, as at levels 4 and 5; under either response), or false");
   cmd->add_flag("--solver-substeps", o.solver_substeps,
                 "Every pile with [simulation] solver_substeps = true (the response solver's sweeps as substeps; at "
-                "level 5 with --solver-edge-contacts)");
+                "level 5 with inter-collision, which every pile has)");
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");
@@ -76,7 +73,6 @@ int run_piles_command(const PilesOptions& o) {
       pile.objects = o.objects;
       pile.box_overlap = o.box_overlap;
       pile.edge_contacts = o.edge_contacts;
-      pile.solver_edge_contacts = o.solver_edge_contacts;
       pile.solver_substeps = o.solver_substeps;
       const std::string text = ffd::random_pile_scene(pile);
       const std::string origin = "pile_" + std::to_string(seed) + ".toml";

@@ -160,18 +160,15 @@ struct SimulationSettings {
   // are tested against the other object's triangles and a crossed edge is sent back the way
   // it came, as at levels 4 and 5 (docs/accuracy.md, "Random piles"), with the planes answered first.
   // false is the paper's method as published (surfaces may stay crossed): its scenes of
-  // several objects keep it.
+  // several objects keep it. Under the response "solver" the same edges are constraints
+  // solved with the others (contact_solver.h), at levels 4 and 5 also only with it, and at
+  // level 5 the surface vertices' contacts too (without, answered at once).
   bool edge_contacts = true;
-  // Under the response "solver", with edge_contacts: each edge crossing a triangle of another
-  // object as a constraint solved with the others (contact_solver.h), and at level 5 the
-  // surface vertices' contacts too (without, answered at once). Asked for by name while a box
-  // resting on another still trembles with them (docs/limits.md).
-  bool solver_edge_contacts = false;
   // Under the response "solver": its sweeps as substeps of dt / sweeps (XPBD with small
   // steps, Macklin et al. 2019), each with its own prediction and the contacts' loads
   // carried over, instead of iterations of one step. A stiff lattice then holds its shape
   // where a contact pushes a few of its nodes (docs/limits.md). Not at level 5 without
-  // solver_edge_contacts, whose vertex contacts are then answered before the solve.
+  // edge_contacts (or inter-collision), whose vertex contacts are then answered before the solve.
   bool solver_substeps = false;
   ProbeSettings probe;                   // used with the "probe" effect
   // Used with the "sleeping" effect: an object whose centre of mass has stayed within

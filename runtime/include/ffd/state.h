@@ -52,7 +52,7 @@ struct ContactAnchor {
   Vec3 offset = Vec3::Zero();  // m, in the frame of the face it lies on, so that it turns with it
 };
 
-// An edge contact of the response "solver" (solver_edge_contacts) that the last step ended
+// An edge contact of the response "solver" (edge_contacts) that the last step ended
 // with its points within kSpeculativeDistance of each other: held the next step as a
 // speculative contact though the edge no longer crosses, so that a surface pushed out the
 // skin's width is not let fall back through it (an edge crossing is found only once made).

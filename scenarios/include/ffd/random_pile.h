@@ -19,7 +19,6 @@ struct PileOptions {
   std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
   bool box_overlap = false;    // written as [simulation] box_overlap = true
   bool edge_contacts = true;   // the default; off: written as [simulation] edge_contacts = false
-  bool solver_edge_contacts = false;  // written as [simulation] solver_edge_contacts = true
   bool solver_substeps = false;       // written as [simulation] solver_substeps = true
 };
 
