@@ -17,7 +17,7 @@ struct PileRun {
   ffd::Accuracy level = ffd::Accuracy::CentreOfMass;
   ffd::ContactResponse response = ffd::ContactResponse::Paper;
   bool box_overlap = false;    // the scene's [simulation] box_overlap
-  bool edge_contacts = false;  // the scene's [simulation] edge_contacts (levels 0-3; 4 and 5 always)
+  bool edge_contacts = false;  // the scene's [simulation] edge_contacts (the paper's response has them at levels 4 and 5 always)
   bool substeps = false;       // the solver's sweeps ran as substeps ([simulation] solver_substeps)
   std::uint64_t steps = 0, sample_every = 0;
   // Intersecting triangle pairs (surface_intersections.h: between objects and within one,

@@ -44,7 +44,7 @@ void register_piles(CLI::App& app, PilesOptions& o) {
                 "back, as at levels 4 and 5; under either response), or false");
   cmd->add_flag("--solver-substeps", o.solver_substeps,
                 "Every pile with [simulation] solver_substeps = true (the response solver's sweeps as substeps; at "
-                "level 5 with inter-collision, which every pile has)");
+                "level 5 only with edge contacts)");
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");
