@@ -100,8 +100,10 @@ TEST_CASE("Determinism: box, plane, probe, surface and grab contacts give the sa
       GENERATE(Case{ContactResponse::Solver, Accuracy::CentreOfMass, false, false},
                Case{ContactResponse::Solver, Accuracy::CentreOfMass, true, false},
                Case{ContactResponse::Solver, Accuracy::CentreOfMass, false, true},
+               Case{ContactResponse::Solver, Accuracy::SubBoxes, false, false},
                Case{ContactResponse::Solver, Accuracy::SubBoxes, true, false},
                Case{ContactResponse::Solver, Accuracy::SubBoxes, true, true},
+               Case{ContactResponse::Solver, Accuracy::Exact, false, false},  // vertex contacts answered at once
                Case{ContactResponse::Solver, Accuracy::Exact, true, false},
                Case{ContactResponse::Solver, Accuracy::Exact, true, true},
                Case{ContactResponse::Paper, Accuracy::CentreOfMass, true, false},
@@ -115,8 +117,9 @@ TEST_CASE("Determinism: box, plane, probe, surface and grab contacts give the sa
   // (at level 5 without substeps the vertex constraints alone keep them apart).
   if (response == ContactResponse::Solver && edges && (accuracy != Accuracy::Exact || substeps))
     CHECK(one.most_edge_contacts > 0);
-  // The solver's list: the boxes on the floor and on each other, the probe.
-  if (response == ContactResponse::Solver) CHECK(one.most_constraints > 50);
+  // The solver's list: the boxes on the floor and on each other, the probe (level 5's vertex
+  // contacts without edge contacts are answered at once, not listed).
+  if (response == ContactResponse::Solver && (accuracy != Accuracy::Exact || edges)) CHECK(one.most_constraints > 50);
   for (const int threads : {2, 8}) {
     const Run many = run(model, threads, 500);
     INFO(threads << " threads");
