@@ -413,7 +413,10 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // contact whose normal a later crossing has turned round, or an edge through both faces of a
 // thin part. Each Gauss-Seidel pass moved the cells back and forth by the same fraction of a
 // millimetre and the surfaces stayed crossed where the two met. Of such a pair the contact
-// asking the lesser correction now lets go; the list keeps its order.
+// asking the lesser correction now lets go; the list keeps its order. Two halves of one
+// pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting the
+// contact held from the last step win instead, or the one that moves the cells' centres
+// apart, left more random piles crossed at the end.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
