@@ -31,6 +31,9 @@ struct BoxLevel {
   // level 5 the vertex contacts too (without, answered at once before the solve). Levels 0-5
   // with edge_contacts in a scene with inter-collision.
   bool solver_edges;
+  // Under the response "solver": level 5's vertex contacts are answered at once in the narrow
+  // phase, before the solve, where they are not constraints (without solver_edges).
+  bool vertex_contacts_at_once() const { return exact && !solver_edges; }
   // m, the gap a box keeps the tested nodes of another object's boxes from its faces:
   // Model::box_skin ("box_overlap"; 0 when off), at level 4 the larger of it and
   // Model::sub_box_skin.

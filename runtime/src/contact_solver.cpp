@@ -259,8 +259,8 @@ void begin_solver_step(const Model& model, State& state, StepMemory& scratch) {
   // Not where level 5's vertex contacts are answered at once in the narrow phase, before the
   // solve (without the solver's edges, step.cpp): substep 0's prediction from the step's start
   // would undo those answers.
-  const bool substeps = model.settings.solver_substeps &&
-                        (state.params.accuracy != Accuracy::Exact || box_level(model, state.params.accuracy).solver_edges);
+  const bool substeps =
+      model.settings.solver_substeps && !box_level(model, state.params.accuracy).vertex_contacts_at_once();
   scratch.substeps = substeps ? dynamics_iterations(model) : 1;
   scratch.substep_gravity = substeps && has(model.settings.effects, Effect::Gravity) ? state.params.gravity : Vec3::Zero();
   predict_dynamics(model, state, scratch, scratch.pool);
@@ -415,8 +415,8 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // millimetre and the surfaces stayed crossed where the two met. Of such a pair the contact
 // asking the lesser correction now lets go; the list keeps its order. Two halves of one
 // pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting the
-// contact held from the last step win instead, or the one that moves the cells' centres
-// apart, left more random piles crossed at the end.
+// contact held from the last step win instead, the one that moves the cells' centres apart,
+// or the one asking the lesser correction, left more random piles crossed at the end.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;

@@ -205,10 +205,10 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
                       std::find(model.pipeline.begin(), model.pipeline.end(), Stage::ContactSolve) != model.pipeline.end();
   // The exact edge contacts (BoxLevel::edges) read where the step started; under the solver
   // they are constraints (BoxLevel::solver_edges), and so are level 5's vertex contacts where
-  // its edges are (without, they are answered at once, as under the paper's response).
+  // its edges are (without, they are answered at once, as under the paper's response:
+  // BoxLevel::vertex_contacts_at_once).
   const bool exact_edges = level.edges && state.params.response == ContactResponse::Paper;
   const bool solver_edges = level.solver_edges && solver;
-  const bool vertex_constraints = solver_edges && level.exact;
   if (exact_edges || solver_edges)
     std::copy(state.x.begin(), state.x.end(), scratch.x_start.begin());
   if (!solver) state.anchor_count = 0;  // the solver's friction anchors (contact_solver.cpp) lapse
@@ -259,7 +259,7 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
       }
       case Stage::NarrowPhase: {
         double& depth = report.max_box_penetration_m;
-        if (solver && (!level.exact || vertex_constraints)) {
+        if (solver && !level.vertex_contacts_at_once()) {
           if (level.exact) find_vertex_constraints(model, state, scratch, counters, depth);
           else find_box_contacts(model, level, state, scratch, counters, depth);
           if (solver_edges) {
