@@ -414,9 +414,9 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // thin part. Each Gauss-Seidel pass moved the cells back and forth by the same fraction of a
 // millimetre and the surfaces stayed crossed where the two met. Of such a pair the contact
 // asking the lesser correction now lets go; the list keeps its order. Two halves of one
-// pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting the
-// contact held from the last step win instead, the one that moves the cells' centres apart,
-// or the one asking the lesser correction, left more random piles crossed at the end.
+// pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting
+// another win instead (the contact held from the last step, the one that moves the cells'
+// centres apart, or the one asking the lesser correction) left more random piles crossed.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
