@@ -413,12 +413,12 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // contact whose normal a later crossing has turned round, or an edge through both faces of a
 // thin part. Each Gauss-Seidel pass moved the cells back and forth by the same fraction of a
 // millimetre and the surfaces stayed crossed where the two met. Of such a pair the contact
-// asking the lesser correction lets go and the other asks only the difference (its rest
-// less the loser's correction), so the two cells are pushed one way by the net of the two
-// requests; the list keeps its order. Letting the larger win outright made two equal halves
-// of one pair of cells win in turn from step to step, and the stack never came to rest;
-// letting another win (the contact held from the last step, the one that moves the cells'
-// centres apart, or the one asking the lesser correction) left more random piles crossed.
+// asking the lesser correction now lets go; the list keeps its order. Two halves of one
+// pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting
+// another win instead (the contact held from the last step, the one that moves the cells'
+// centres apart, or the one asking the lesser correction) left more random piles crossed;
+// so did letting the larger ask only the difference of the two, which holds still two thin
+// parts crossed through each other, each edge through the other's face.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
@@ -443,10 +443,7 @@ void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
         const Index ci = order[i], cj = order[j];
         if (dropped[ci - begin] || dropped[cj - begin]) continue;
         const ContactConstraint &c = scratch.constraints[ci], &d = scratch.constraints[cj];
-        if (!opposed(c, d)) continue;
-        const Index loser = correction(c) < correction(d) ? ci : cj, winner = loser == ci ? cj : ci;
-        scratch.constraints[winner].rest -= std::max(0.0, correction(scratch.constraints[loser]));
-        dropped[loser - begin] = 1;
+        if (opposed(c, d)) dropped[(correction(c) < correction(d) ? ci : cj) - begin] = 1;
       }
   }
   // (The edge contacts end the list here.)
