@@ -417,8 +417,8 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting
 // another win instead (the contact held from the last step, the one that moves the cells'
 // centres apart, or the one asking the lesser correction) left more random piles crossed;
-// so did letting the larger ask only the difference of the two, which holds still two thin
-// parts crossed through each other, each edge through the other's face.
+// so did letting the larger ask only the difference of the two, which can hold two thin
+// parts still where they cross through each other, each edge through the other's face.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
