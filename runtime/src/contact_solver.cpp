@@ -410,15 +410,16 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 }
 
 // Two edge contacts that push the same two cells opposite ways cannot both be met: a held
-// contact whose normal a later crossing has turned round, or an edge through both faces of a
-// thin part. Each Gauss-Seidel pass moved the cells back and forth by the same fraction of a
-// millimetre and the surfaces stayed crossed where the two met. Of such a pair the contact
-// asking the lesser correction now lets go; the list keeps its order. Two halves of one
-// pair of cells can so win in turn from step to step (docs/limits.md, item 6); letting
-// another win instead (the contact held from the last step, the one that moves the cells'
-// centres apart, or the one asking the lesser correction) left more random piles crossed;
-// so did letting the larger ask only the difference of the two, which can hold two thin
-// parts still where they cross through each other, each edge through the other's face.
+// contact whose normal a later crossing has turned round, an edge through both faces of a
+// thin part, or two thin parts crossed through each other, an edge of each through the
+// other's face. Each Gauss-Seidel pass moved the cells back and forth by the same fraction
+// of a millimetre and the surfaces stayed crossed where the two met. Of such a pair the
+// contact asking the lesser correction now lets go; the list keeps its order. Two halves of
+// one pair of cells can so win in turn from step to step (docs/limits.md, item 6). Every
+// other rule tried left more random piles crossed: another winning (the contact held from
+// the last step, the one that moves the cells' centres apart, the one asking the lesser
+// correction, or that one only where both ask one), or the larger asking only the
+// difference of the two, which can hold two parts still where they cross.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
