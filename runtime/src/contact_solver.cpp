@@ -416,10 +416,10 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // of a millimetre and the surfaces stayed crossed where the two met. Of such a pair the
 // contact asking the lesser correction now lets go; the list keeps its order. Two halves of
 // one pair of cells can so win in turn from step to step (docs/limits.md, item 6). Every
-// other rule tried left more random piles crossed: another winning (the contact held from
-// the last step, the one that moves the cells' centres apart, the one asking the lesser
-// correction, or that one only where both ask one), or the larger asking only the
-// difference of the two, which can hold two parts still where they cross.
+// other rule tried left more random piles crossed: another winning (the one that moves the
+// cells' centres apart, the contact held from the last step or the one asking the lesser
+// correction, each everywhere or only where both halves ask one), or the larger asking only
+// the difference of the two, which can hold two parts still where they cross.
 void drop_opposed_edge_contacts(const Bodies& bodies, StepMemory& scratch) {
   const Index begin = scratch.edge_contact_begin, end = std::min(scratch.edge_contact_end, scratch.constraint_count);
   if (end - begin < 2) return;
