@@ -414,7 +414,7 @@ bool opposed(const ContactConstraint& c, const ContactConstraint& d) {
 // thin part, or two thin parts crossed through each other, an edge of each through the
 // other's face. Each Gauss-Seidel pass moved the cells back and forth by the same fraction
 // of a millimetre and the surfaces stayed crossed where the two met. Of such a pair the
-// contact asking the lesser correction now lets go; the list keeps its order. Two halves of
+// contact asking the lesser correction lets go; the list keeps its order. Two halves of
 // one pair of cells can so win in turn from step to step (docs/limits.md, item 6). Every
 // other rule tried left more random piles crossed: another winning (the one that moves the
 // cells' centres apart, the contact held from the last step or the one asking the lesser
