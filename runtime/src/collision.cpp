@@ -387,9 +387,9 @@ bool closest_around(const Model& model, const State& state, CollisionMemory& scr
   return reliable;
 }
 
-// A cell's triangles and their edges as the edge tests take them: at levels 4 and 5 those
-// crossing the cell (Model::cell_triangles), at levels 0-3 those it owns
-// (Model::cell_owned_triangles), each tested once.
+// A cell's triangles and their edges as the edge tests take them: the edge contacts those it
+// owns (Model::cell_owned_triangles), each tested once; level 5's answers at once (test_edges)
+// those with a corner bound to it (Model::cell_triangles, "crossing" here).
 struct CellSurface {
   const std::vector<Index>& triangle_begin;
   const std::vector<Index>& triangles;
@@ -699,8 +699,8 @@ EdgeCrossing deepest_edge_crossing(const Model& model, const State& state, Colli
   // triangles): only where it meets cell_a's can an edge cross a triangle.
   Vec3 reach_lo, reach_hi, edges_lo, edges_hi;
   bool corners_finite = true;
-  // cell_a's triangles (corners, AABBs) and cell_b's edges' AABBs: levels 0-3's owned
-  // surfaces from the per-cell cache, levels 4 and 5's crossing triangles loaded for this pair.
+  // cell_a's triangles (corners, AABBs) and cell_b's edges' AABBs: the owned surfaces from
+  // the per-cell cache, level 5's crossing triangles (test_edges) loaded for this pair.
   const Vec3* corners = scratch.triangle_corners.data();
   BoxColumns triangle_boxes{{scratch.triangle_lo[0].data(), scratch.triangle_lo[1].data(), scratch.triangle_lo[2].data()},
                             {scratch.triangle_hi[0].data(), scratch.triangle_hi[1].data(), scratch.triangle_hi[2].data()}};
@@ -876,15 +876,20 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
   invalidate_surface_around(model, scratch, crossing.carrier_b);
 }
 
-// Levels 0-3 with edge contacts: the pairs of cells of two objects whose owned triangles'
-// bounds meet, found by the broad phase over those bounds in place of the boxes' (the box
-// pairs, answered by now, are not needed again this step). A triangle spans cells, its
-// corners moved by the cells they are bound to, and across a bent lattice it leaves the
-// boxes: paired by boxes, an edge passed through another surface unseen, and found crossed
-// steps later it was pushed out on the far side (the fast_impact hard case: a bullet through
-// its plate). A cell that owns no triangle keeps its box's bounds.
-void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+// The edge contacts' pairs of cells of two objects whose owned triangles' bounds meet, at
+// every level: found by the broad phase over those bounds, one per cell (Model::boxes), in
+// place of the step's boxes' (whose pairs, answered by now, are not needed again this step).
+// A triangle spans cells, its corners moved by the cells they are bound to, and across a bent
+// lattice it leaves the boxes: paired by boxes, an edge passed through another surface unseen,
+// and found crossed steps later it was pushed out on the far side (the fast_impact hard case:
+// a bullet through its plate); paired by level 4's sub-boxes, a letter's side, one triangle a
+// few cells long, crossed a plate where no cell that carries its corners met the plate, and
+// stayed crossed at rest. A cell that owns no triangle (and so no edge) keeps its box's
+// bounds where the step's boxes are the cells' (step_boxes), else a point at its first node.
+void pair_cells_by_triangles(const Model& model, const BoxSet& step_boxes, const State& state, CollisionMemory& scratch,
                              StageCounters& counters) {
+  const BoxSet& boxes = model.boxes;
+  const bool box_bounds = &step_boxes == &model.boxes;
   // Every cell's surface vertices, then every box's bounds, in chunks over the pool: a chunk
   // writes only its own cells' vertices and its own boxes' bounds, and the values are the ones
   // the lazy cache would give, so the state is the same bit for bit whatever the thread count.
@@ -905,31 +910,36 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& boxes, const Stat
           hi = hi.cwiseMax(scratch.surface_x[v]);
         }
       const bool has_triangles = (lo.array() <= hi.array()).all();
+      const Vec3& node = state.x[model.cell_nodes[cell][0]];
       for (int axis = 0; axis < 3; ++axis) {
-        scratch.surface_lo[axis][b] = has_triangles ? lo[axis] : scratch.box_lo[axis][b];
-        scratch.surface_hi[axis][b] = has_triangles ? hi[axis] : scratch.box_hi[axis][b];
+        scratch.surface_lo[axis][b] = has_triangles ? lo[axis] : box_bounds ? scratch.box_lo[axis][b] : node[axis];
+        scratch.surface_hi[axis][b] = has_triangles ? hi[axis] : box_bounds ? scratch.box_hi[axis][b] : node[axis];
       }
     }
   });
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
+  // The sleepers' wake margins are kept per box: the cells' here, the step's again after.
+  const bool wake_margins = sleeping(model) && !box_bounds;
+  if (wake_margins) set_wake_margins(model, boxes, state, scratch);
   grow_box_bounds(model, boxes, 0.0, scratch, scratch);
   PairQuery query;
   query.inter = true;
   query.ordered = false;  // sorted by cells below
   find_pairs(model, boxes, query, scratch, scratch, scratch.pool, counters);
+  if (wake_margins) set_wake_margins(model, step_boxes, state, scratch);
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
 }
 
 // The pairs of cells of two objects the edge tests take, each once and in cell order, both
-// awake or one of them: at level 4 the cells of the sub-boxes the broad phase paired, at
-// levels 0-3 the cells whose triangles' bounds meet (pair_cells_by_triangles). Into
-// NarrowMemory::cell_pair_keys as (lower << 32 | higher); returns how many.
-Index find_edge_cell_pairs(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
+// awake or one of them: the cells whose owned triangles' bounds meet (pair_cells_by_triangles).
+// Into NarrowMemory::cell_pair_keys as (lower << 32 | higher); returns how many.
+Index find_edge_cell_pairs(const Model& model, const BoxSet& step_boxes, const State& state, CollisionMemory& scratch,
                            StageCounters& counters) {
   begin_surface_tests(scratch);
-  if (&boxes != &model.sub_boxes) pair_cells_by_triangles(model, boxes, state, scratch, counters);
+  pair_cells_by_triangles(model, step_boxes, state, scratch, counters);
+  const BoxSet& boxes = model.boxes;
   std::uint64_t* keys = scratch.cell_pair_keys.data();
   Index count = 0;
   for (Index p = 0; p < scratch.pair_count; ++p) {
@@ -958,11 +968,6 @@ void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const Stat
   }
 }
 
-// The edge tests' triangles: at levels 0-3 each cell's own, at level 4 those crossing it.
-CellSurface edge_surface(const Model& model, const BoxSet& boxes) {
-  return &boxes != &model.sub_boxes ? owned_surface(model) : crossing_surface(model);
-}
-
 // Under the paper's response, after the boxes' responses: level 5's edge contacts
 // (test_edges) on every pair of cells of two objects that the broad phase paired
 // (for_each_edge_cell_pair). The boxes stop most of a thin part's way in, but two crossed
@@ -972,7 +977,7 @@ CellSurface edge_surface(const Model& model, const BoxSet& boxes) {
 template <bool kFriction>
 void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state, CollisionMemory& scratch,
                           StageCounters& counters, double& max_depth) {
-  const CellSurface surface = edge_surface(model, boxes);
+  const CellSurface surface = owned_surface(model);
   for_each_edge_cell_pair(model, boxes, state, scratch, counters, [&](Index c1, Index c2) {
     test_edges<kFriction>(model, state, scratch, c1, c2, surface, counters, max_depth);
     test_edges<kFriction>(model, state, scratch, c2, c1, surface, counters, max_depth);
@@ -1336,14 +1341,13 @@ void collide_planes(const Model& model, const BoxLevel& level, State& state, Col
   }
 }
 
-// Detection only (nothing moves), so at levels 0-3 the pairs spread over the pool: every cell
-// of a pair has its owned-surface cache filled first (each by one thread), a pair's two halves
-// are written to its own two slots of edge_crossings, and the crossings found are then packed
-// in pair order, the list one thread finds. Level 4's crossing triangles are loaded per pair
-// into one shared buffer: there one thread tests the pairs.
+// Detection only (nothing moves), so the pairs spread over the pool: every cell of a pair has
+// its owned-surface cache filled first (each by one thread), a pair's two halves are written
+// to its own two slots of edge_crossings, and the crossings found are then packed in pair
+// order, the list one thread finds.
 void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
                         StageCounters& counters) {
-  const CellSurface surface = edge_surface(model, boxes);
+  const CellSurface surface = owned_surface(model);
   const Index pairs = find_edge_cell_pairs(model, boxes, state, scratch, counters);
   EdgeCrossing* crossings = scratch.edge_crossings.data();
   const auto test_halves = [&](Index k, StageCounters& thread_counters, NarrowMemory::EdgeTestMemory& edge_tests) {
@@ -1352,7 +1356,7 @@ void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& st
     crossings[2 * k + 1] =
         deepest_edge_crossing(model, state, scratch, c2, c1, surface, thread_counters, true, edge_tests);
   };
-  if (surface.crossing || scratch.narrow_workspaces.size() < 2) {
+  if (scratch.narrow_workspaces.size() < 2) {
     for (Index k = 0; k < pairs; ++k) test_halves(k, counters, scratch.edge_tests);
   } else {
     std::uint8_t* in_pair = scratch.edge_cell_in_pair.data();

@@ -267,10 +267,9 @@ void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scr
                           VertexContactSink& sink);
 
 // The edge contacts as the response "solver" takes them: the deepest edge crossing of each
-// half of each pair of cells of two objects (levels 0-3: those whose triangles' bounds meet;
-// level 4: of the paired sub-boxes), as the lattice is now, into NarrowMemory::edge_crossings,
-// in cell-pair order. Replaces the broad phase's pairs at levels 0-3. Reads the State;
-// refreshes the surface caches.
+// half of each pair of cells of two objects whose owned triangles' bounds meet, as the lattice
+// is now, into NarrowMemory::edge_crossings, in cell-pair order. Replaces the broad phase's
+// pairs. Reads the State; refreshes the surface caches.
 void find_crossed_edges(const Model& model, const BoxSet& boxes, const State& state, CollisionMemory& scratch,
                         StageCounters& counters);
 

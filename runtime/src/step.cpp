@@ -264,7 +264,7 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
           else find_box_contacts(model, level, state, scratch, counters, depth);
           if (solver_edges) {
             find_edge_contacts(model, level, state, scratch, counters, depth);
-            // Its own pairs (levels 0-3) may overflow: grown between steps.
+            // Its own pairs may overflow: grown between steps.
             if (scratch.pairs_dropped) report.hash_overflow = true;
           }
         } else if (level.exact) {
@@ -274,7 +274,7 @@ void step(const Model& model, State& state, Scratch& whole, StepReport& report) 
         } else {
           if (friction) collide_boxes<true>(model, level, state, scratch, counters, depth);
           else collide_boxes<false>(model, level, state, scratch, counters, depth);
-          // The edge contacts' own pairs (levels 0-3) may overflow too: grown between steps.
+          // The edge contacts' own pairs may overflow too: grown between steps.
           if (scratch.pairs_dropped) report.hash_overflow = true;
         }
         break;
