@@ -969,7 +969,7 @@ void for_each_edge_cell_pair(const Model& model, const BoxSet& boxes, const Stat
 }
 
 // Under the paper's response, after the boxes' responses: level 5's edge contacts
-// (test_edges) on every pair of cells of two objects that the broad phase paired
+// (test_edges) on every pair of cells of two objects whose owned triangles' bounds meet
 // (for_each_edge_cell_pair). The boxes stop most of a thin part's way in, but two crossed
 // like an X hold no node of each other, and a crossing once made stayed
 // (docs/results/piles.md: the rows without edge contacts); the exact edges send a crossed
