@@ -884,12 +884,11 @@ void test_edges(const Model& model, State& state, CollisionMemory& scratch, Inde
 // and found crossed steps later it was pushed out on the far side (the fast_impact hard case:
 // a bullet through its plate); paired by level 4's sub-boxes, a letter's side, one triangle a
 // few cells long, crossed a plate where no cell that carries its corners met the plate, and
-// stayed crossed at rest. A cell that owns no triangle (and so no edge) keeps its box's
-// bounds where the step's boxes are the cells' (step_boxes), else a point at its first node.
+// stayed crossed at rest. A cell that owns no triangle has no edge either, and nothing to
+// test: it stands at a point, its first node.
 void pair_cells_by_triangles(const Model& model, const BoxSet& step_boxes, const State& state, CollisionMemory& scratch,
                              StageCounters& counters) {
   const BoxSet& boxes = model.boxes;
-  const bool box_bounds = &step_boxes == &model.boxes;
   // Every cell's surface vertices, then every box's bounds, in chunks over the pool: a chunk
   // writes only its own cells' vertices and its own boxes' bounds, and the values are the ones
   // the lazy cache would give, so the state is the same bit for bit whatever the thread count.
@@ -912,22 +911,21 @@ void pair_cells_by_triangles(const Model& model, const BoxSet& step_boxes, const
       const bool has_triangles = (lo.array() <= hi.array()).all();
       const Vec3& node = state.x[model.cell_nodes[cell][0]];
       for (int axis = 0; axis < 3; ++axis) {
-        scratch.surface_lo[axis][b] = has_triangles ? lo[axis] : box_bounds ? scratch.box_lo[axis][b] : node[axis];
-        scratch.surface_hi[axis][b] = has_triangles ? hi[axis] : box_bounds ? scratch.box_hi[axis][b] : node[axis];
+        scratch.surface_lo[axis][b] = has_triangles ? lo[axis] : node[axis];
+        scratch.surface_hi[axis][b] = has_triangles ? hi[axis] : node[axis];
       }
     }
   });
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
   // The sleepers' wake margins are kept per box: the cells' here, the step's again after.
-  const bool wake_margins = sleeping(model) && !box_bounds;
-  if (wake_margins) set_wake_margins(model, boxes, state, scratch);
+  if (sleeping(model)) set_wake_margins(model, boxes, state, scratch);
   grow_box_bounds(model, boxes, 0.0, scratch, scratch);
   PairQuery query;
   query.inter = true;
   query.ordered = false;  // sorted by cells below
   find_pairs(model, boxes, query, scratch, scratch, scratch.pool, counters);
-  if (wake_margins) set_wake_margins(model, step_boxes, state, scratch);
+  if (sleeping(model)) set_wake_margins(model, step_boxes, state, scratch);
   std::swap(scratch.box_lo, scratch.surface_lo);
   std::swap(scratch.box_hi, scratch.surface_hi);
 }
