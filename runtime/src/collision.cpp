@@ -1257,28 +1257,43 @@ void collide_surfaces(const Model& model, State& state, CollisionMemory& scratch
 
 void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double margin,
                           VertexContactSink& sink) {
+  // Hands a contact to the sink with where on its triangle the closest point lies, as the
+  // corners are now; a sliver has no such point and is left out.
+  const auto emit = [&](VertexContact contact, bool same_object) {
+    const std::array<Index, 3>& tri = model.surface_triangles[contact.triangle];
+    const Vec3& a = cached_vertex(model, state, scratch, tri[0]);
+    const Vec3 ab = cached_vertex(model, state, scratch, tri[1]) - a;
+    const Vec3 ac = cached_vertex(model, state, scratch, tri[2]) - a;
+    const Vec3 aq = contact.closest - a;
+    const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac), d20 = aq.dot(ab), d21 = aq.dot(ac);
+    const double denominator = d00 * d11 - d01 * d01;
+    if (!(denominator > 0.0)) return;
+    const double v = std::clamp((d11 * d20 - d01 * d21) / denominator, 0.0, 1.0);
+    const double w = std::clamp((d00 * d21 - d01 * d20) / denominator, 0.0, 1.0 - v);
+    contact.barycentric = Vec3(1.0 - v - w, v, w);
+    sink.add(contact, same_object);
+  };
+  // Of one half of a cell pair, every vertex behind the other's surface is a constraint: the
+  // deepest alone leaves the others crossed while it is pushed out, and the solver shares
+  // the push between them. Where none is behind, the nearest within the margin is one, so
+  // that a pair about to meet is held before it crosses (a constraint per vertex in front
+  // would stack dozens on two cells and set piles shaking).
+  const double floor = -margin;
   for_each_surface_pair(model, state, scratch, counters, [&](Index c1, Index c2, bool same_object) {
     for (const auto& [cell_b, cell_a] : {std::pair{c1, c2}, std::pair{c2, c1}}) {
-      double deepest = -margin;
-      VertexContact contact;
-      judge_vertices(model, state, scratch, cell_b, cell_a, same_object, counters, deepest, [&](const VertexContact& c) {
-        deepest = c.depth;
-        contact = c;
+      bool any_inside = false;
+      double nearest = floor;
+      VertexContact nearest_contact;
+      judge_vertices(model, state, scratch, cell_b, cell_a, same_object, counters, floor, [&](const VertexContact& c) {
+        if (c.inside) {
+          any_inside = true;
+          emit(c, same_object);
+        } else if (c.depth > nearest) {
+          nearest = c.depth;
+          nearest_contact = c;
+        }
       });
-      if (!(deepest > -margin)) continue;
-      // Where on the triangle the closest point lies, as the corners are now.
-      const std::array<Index, 3>& tri = model.surface_triangles[contact.triangle];
-      const Vec3& a = cached_vertex(model, state, scratch, tri[0]);
-      const Vec3 ab = cached_vertex(model, state, scratch, tri[1]) - a;
-      const Vec3 ac = cached_vertex(model, state, scratch, tri[2]) - a;
-      const Vec3 aq = contact.closest - a;
-      const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac), d20 = aq.dot(ab), d21 = aq.dot(ac);
-      const double denominator = d00 * d11 - d01 * d01;
-      if (!(denominator > 0.0)) continue;  // a sliver: no point to carry
-      const double v = std::clamp((d11 * d20 - d01 * d21) / denominator, 0.0, 1.0);
-      const double w = std::clamp((d00 * d21 - d01 * d20) / denominator, 0.0, 1.0 - v);
-      contact.barycentric = Vec3(1.0 - v - w, v, w);
-      sink.add(contact, same_object);
+      if (!any_inside && nearest > floor) emit(nearest_contact, same_object);
     }
   });
 }

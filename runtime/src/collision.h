@@ -258,11 +258,9 @@ class VertexContactSink {
 };
 
 // Level 5's vertex contacts as the response "solver" takes them: over the candidate pairs, in
-// pair order, both halves of each, the surface vertex of one cell with the deepest push out
-// of the other's surface, if above -margin (m: inside, or within the skin and `margin` in
-// front), into sink.add. One a pair half, as the paper's response answers them: a contact
-// per vertex costs a closest-triangle search for every vertex near a resting surface.
-// Reads the State but for the sleepers it wakes; refreshes the surface caches.
+// pair order, both halves of each, every surface vertex of one cell inside the other's
+// surface, or where none is, the one nearest to it within the skin and `margin` (m) in front,
+// into sink.add. Reads the State but for the sleepers it wakes; refreshes the surface caches.
 void find_vertex_contacts(const Model& model, State& state, CollisionMemory& scratch, StageCounters& counters, double margin,
                           VertexContactSink& sink);
 
