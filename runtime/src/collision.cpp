@@ -344,13 +344,6 @@ bool behind_every_face_at(const Model& model, const State& state, CollisionMemor
   return true;
 }
 
-// A cell turned inside out (the Jacobian of eq. 2 at its centre has a negative
-// determinant) turns its piece of the embedded surface inside out too: behind its triangles
-// is outside, and a response to them would push the other object in, crushing more cells.
-bool cell_inverted(const Model& model, const State& state, Index cell) {
-  const std::array<Index, 8>& n = model.cell_nodes[cell];
-  return cell_inside_out([&](int j) -> const Vec3& { return state.x[n[j]]; });
-}
 
 // Narrows (best_sq, best_point, best_normal, best_triangle, best_feature) to the closest
 // triangle of the cells sharing a node with cell_a. For a pair of one object's cells, the

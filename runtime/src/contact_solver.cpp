@@ -1065,6 +1065,10 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
       for (int pass = 0; pass < kEdgePasses; ++pass)
         if (!(project_contacts(bodies, scratch, beta, ContactPass::Edges) >= kEdgeConverged)) break;
     if (grabbing) project_grab(model, bodies, scratch);
+    // The contacts move the nodes that carry their points, and in a sweep or few a hard
+    // lattice gives way around them: a node pushed through its cell's opposite face leaves
+    // the cell inside out, which the next sweep's springs would keep.
+    restore_inverted_cells(model, state, scratch, scratch.pool);
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.
   // Without this pass the last contacts of a pass (the probe's) pushed a box's nodes through

@@ -1,5 +1,6 @@
 #include "dynamics.h"
 
+#include "ffd/trilinear.h"
 #include "ffd/worker_pool.h"
 #include "kernels/spring_kernels.h"
 #include "monotonic_clock.h"
@@ -26,31 +27,43 @@ void extract_rotation(const Mat3& A, Quat& q, int max_iterations) {
 
 namespace {
 
+// A tetrahedron's volume V = d1 . (d2 x d3) / 6 with d_i = x_i - x0, and its gradient:
+// (d2 x d3) / 6, (d3 x d1) / 6, (d1 x d2) / 6 for x1..x3 and minus their sum for x0.
+struct VolumeGradient {
+  double volume;         // m^3, signed: < 0 inside out
+  std::array<Vec3, 4> g;  // m^2
+  double denominator;    // sum of w_i |g_i|^2
+};
+VolumeGradient volume_gradient(const Model& model, const Tetrahedron& t, const State& state) {
+  const Vec3& x0 = state.x[t.nodes[0]];
+  const Vec3 d1 = state.x[t.nodes[1]] - x0, d2 = state.x[t.nodes[2]] - x0, d3 = state.x[t.nodes[3]] - x0;
+  VolumeGradient v;
+  v.g[1] = d2.cross(d3) / 6.0;
+  v.g[2] = d3.cross(d1) / 6.0;
+  v.g[3] = d1.cross(d2) / 6.0;
+  v.g[0] = -(v.g[1] + v.g[2] + v.g[3]);
+  v.volume = d1.dot(v.g[1]);
+  v.denominator = 0.0;
+  for (int i = 0; i < 4; ++i) v.denominator += model.node_inv_mass[t.nodes[i]] * v.g[i].squaredNorm();
+  return v;
+}
+
+// Moves the tetrahedron's nodes by dlambda along the volume's gradient, each by its inverse mass.
+void move_along_gradient(const Model& model, const Tetrahedron& t, const VolumeGradient& v, double dlambda, State& state) {
+  for (int i = 0; i < 4; ++i) state.x[t.nodes[i]] += (model.node_inv_mass[t.nodes[i]] * dlambda) * v.g[i];
+}
+
 // One XPBD projection of a tetrahedron's volume constraint C = V - V0 with compliance
-// V0 / K (so its energy is K (V - V0)^2 / 2 V0). V = d1 . (d2 x d3) / 6 with d_i = x_i - x0;
-// its gradient is (d2 x d3) / 6, (d3 x d1) / 6, (d1 x d2) / 6 and minus their sum for x0.
-// C is signed, so an inverted tetrahedron (V < 0) is pushed back through flat to upright,
-// where springs alone are as content with the mirror image.
+// V0 / K (so its energy is K (V - V0)^2 / 2 V0). C is signed, so an inverted tetrahedron
+// (V < 0) is pushed back through flat to upright, where springs alone are as content with
+// the mirror image.
 void project_volume(const Model& model, const Tetrahedron& t, double inv_dt2, double& lambda, State& state) {
-  Vec3& x0 = state.x[t.nodes[0]];
-  Vec3& x1 = state.x[t.nodes[1]];
-  Vec3& x2 = state.x[t.nodes[2]];
-  Vec3& x3 = state.x[t.nodes[3]];
-  const Vec3 d1 = x1 - x0, d2 = x2 - x0, d3 = x3 - x0;
-  const Vec3 g1 = d2.cross(d3) / 6.0, g2 = d3.cross(d1) / 6.0, g3 = d1.cross(d2) / 6.0;
-  const Vec3 g0 = -(g1 + g2 + g3);
-  const double w0 = model.node_inv_mass[t.nodes[0]], w1 = model.node_inv_mass[t.nodes[1]];
-  const double w2 = model.node_inv_mass[t.nodes[2]], w3 = model.node_inv_mass[t.nodes[3]];
+  const VolumeGradient v = volume_gradient(model, t, state);
   const double alpha_tilde = t.compliance * inv_dt2;  // > 0: defined even for a flat tetrahedron
-  const double denominator =
-      w0 * g0.squaredNorm() + w1 * g1.squaredNorm() + w2 * g2.squaredNorm() + w3 * g3.squaredNorm() + alpha_tilde;
-  const double C = d1.dot(g1) - t.rest_volume;
-  const double dlambda = (-C - alpha_tilde * lambda) / denominator;
+  const double C = v.volume - t.rest_volume;
+  const double dlambda = (-C - alpha_tilde * lambda) / (v.denominator + alpha_tilde);
   lambda += dlambda;
-  x0 += (w0 * dlambda) * g0;
-  x1 += (w1 * dlambda) * g1;
-  x2 += (w2 * dlambda) * g2;
-  x3 += (w3 * dlambda) * g3;
+  move_along_gradient(model, t, v, dlambda, state);
 }
 
 // The rotation R (from q, updated in place) that maximises tr(R^T A): Newton steps on a
@@ -448,6 +461,28 @@ void sweep_cells(const Model& model, int iteration, State& state, DynamicsMemory
 }
 
 }  // namespace
+
+void restore_inverted_cells(const Model& model, State& state, const DynamicsMemory& memory, WorkerPool* pool) {
+  const double h = model.settings.dt / memory.substeps;  // s: the step, or the substep
+  parallel_for(pool, static_cast<std::uint32_t>(model.objects.size()), [&](std::uint32_t i, std::uint32_t) {
+    const ObjectModel& obj = model.objects[i];
+    if (obj.dynamics != DynamicsKind::MassSpring || has_cell_constraints(obj) || !memory.object_stepping[i]) return;
+    // The springs' own stiffness as a bulk modulus, K = k / cell size (Pa): a soft lattice
+    // is not thrown upright harder than its springs would pull it.
+    const double modulus = obj.mass_spring.stiffness / obj.cell_size;
+    for (Index c = obj.cell_begin; c < obj.cell_end; ++c) {
+      if (!cell_inverted(model, state, c)) continue;
+      for (int pass = 0; pass < kUprightPasses; ++pass)
+        for (int k = 0; k < 6; ++k) {
+          const Tetrahedron t = kuhn_tetrahedron(model, c, k, 0.0);
+          const VolumeGradient v = volume_gradient(model, t, state);
+          const double C = v.volume - t.rest_volume;
+          const double alpha_tilde = t.rest_volume / modulus / (h * h);  // XPBD: compliance / h^2
+          if (C < 0.0) move_along_gradient(model, t, v, -C / (v.denominator + alpha_tilde), state);
+        }
+    }
+  });
+}
 
 void sweep_springs(const Model& model, int first, int last, DynamicsMemory& memory, WorkerPool* pool) {
   const Index stages = static_cast<Index>(memory.stage_first_chunk.size()) - 1;

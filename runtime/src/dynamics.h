@@ -111,6 +111,18 @@ void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMem
 // g h of its g dt); the multipliers reset (XPBD with small steps, Macklin et al. 2019).
 void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memory, WorkerPool* pool);
 void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
+// A cell turned inside out (cell_inverted) of every stepping mass-spring object whose
+// springs alone hold its cells, pushed back upright: each tetrahedron of its Kuhn split
+// below its rest volume grown towards it (C = V - V0 >= 0, XPBD with compliance V0 / K,
+// K = the springs' stiffness over the cell size), in kUprightPasses Gauss-Seidel passes over
+// the six (they share nodes: one pass leaves some of them short). Springs are as content
+// with a cell's mirror image as with the cell, so a cell that a contact pushed a node of
+// through its opposite face stays inside out without this, and the surface it carries stays
+// folded through itself. Volumes or shapes (bulk_modulus, shape_stiffness) bring such a
+// cell back themselves. Every cell is looked at: the springs carry a contact's push to
+// cells around the ones that carry its points, and those too turn inside out.
+inline constexpr int kUprightPasses = 3;
+void restore_inverted_cells(const Model& model, State& state, const DynamicsMemory& memory, WorkerPool* pool);
 // Sweeps [first, last) of every object's springs alone, stage by stage (sweep_dynamics adds
 // the volumes and shapes).
 void sweep_springs(const Model& model, int first, int last, DynamicsMemory& memory, WorkerPool* pool);

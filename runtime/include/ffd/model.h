@@ -10,6 +10,7 @@
 
 #include "ffd/spec.h"
 #include "ffd/state.h"
+#include "ffd/trilinear.h"
 
 namespace ffd {
 
@@ -235,6 +236,18 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log);
 
 // The state at time zero: rest lattice placed by each object's position, rotation, velocity.
 State initial_state(const Model& model);
+
+// Whether cell `cell` is inside out as the state has it (cell_inside_out: the Jacobian of
+// eq. 2 at its centre has a determinant <= 0). Its piece of the embedded surface is then
+// inside out too: behind its triangles is outside.
+inline bool cell_inverted(const Model& model, const State& state, Index cell) {
+  const std::array<Index, 8>& n = model.cell_nodes[cell];
+  return cell_inside_out([&](int j) -> const Vec3& { return state.x[n[j]]; });
+}
+
+// Tetrahedron k (0-5) of cell `cell`'s Kuhn split, around its diagonal from corner 0 to
+// corner 7, with its rest volume and `compliance`.
+Tetrahedron kuhn_tetrahedron(const Model& model, Index cell, int k, double compliance);
 
 // Mass-weighted centre of one object's lattice nodes at positions x (m).
 inline Vec3 centre_of_mass(const Model& model, const std::vector<Vec3>& x, Index object) {
