@@ -1047,6 +1047,10 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
   const double beta = has(model.settings.effects, Effect::Friction) ? state.params.beta : 0.0;
   const bool grabbing = has(model.settings.effects, Effect::Grab) && state.grab.active;
   if (grabbing) wake(state, model.cell_object[state.grab.cell]);  // solved from the next step if asleep now
+  // Where level 5's vertex contacts are answered at once, eq. 9 moves whole cells as under the
+  // paper's response and a cell inside out comes back by itself; restoring cells there left
+  // the hard bunnies' surfaces crossed at level 5.
+  const bool keep_upright = !box_level(model, state.params.accuracy).vertex_contacts_at_once();
   const int iterations = dynamics_iterations(model);
   const int friction_passes = beta > 0.0 ? kFrictionPasses : 0;
   const bool substeps = scratch.substeps > 1;
@@ -1068,7 +1072,7 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
     // The contacts move the nodes that carry their points, and in a sweep or few a hard
     // lattice gives way around them: a node pushed through its cell's opposite face leaves
     // the cell inside out, which the next sweep's springs would keep.
-    restore_inverted_cells(model, state, scratch, scratch.pool);
+    if (keep_upright) restore_inverted_cells(model, state, scratch, scratch.pool);
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.
   // Without this pass the last contacts of a pass (the probe's) pushed a box's nodes through
