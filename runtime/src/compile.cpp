@@ -261,11 +261,11 @@ void warn_about_start_overlaps(const Model& model, std::vector<std::string>& log
 }
 }  // namespace
 
-Tetrahedron kuhn_tetrahedron(const Model& model, Index cell, int k, double compliance) {
+Tetrahedron kuhn_tetrahedron(const Model& model, Index cell, int k) {
   constexpr int kAxes[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};  // corner bits: x 1, y 2, z 4
   const auto [first, second] = kAxes[k];
   const std::array<Index, 8>& corner = model.cell_nodes[cell];
-  Tetrahedron t{{corner[0], corner[first], corner[first | second], corner[7]}, 0.0, compliance};
+  Tetrahedron t{{corner[0], corner[first], corner[first | second], corner[7]}, 0.0, 0.0};
   const Vec3& x0 = model.node_rest[t.nodes[0]];
   double volume = (model.node_rest[t.nodes[1]] - x0).dot((model.node_rest[t.nodes[2]] - x0).cross(model.node_rest[t.nodes[3]] - x0)) / 6.0;
   if (volume < 0.0) {  // the odd permutations: swap two corners
@@ -422,7 +422,7 @@ Model compile(const SceneSpec& spec, std::vector<std::string>& log) {
     if (o.dynamics == DynamicsKind::MassSpring && o.mass_spring.bulk_modulus > 0.0)
       for (Index c = obj.cell_begin; c < obj.cell_end; ++c)
         for (int k = 0; k < 6; ++k) {
-          Tetrahedron t = kuhn_tetrahedron(model, c, k, 0.0);
+          Tetrahedron t = kuhn_tetrahedron(model, c, k);
           t.compliance = t.rest_volume / o.mass_spring.bulk_modulus;
           model.tetrahedra.push_back(t);
         }

@@ -343,11 +343,12 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
 
 // Level 5 with edge_contacts (BoxLevel::solver_edges): of each half of a pair of cells, every
 // surface vertex inside the other's surface, or where none is the one nearest to it within
-// the skin and the speculative distance in front (find_vertex_contacts), becomes a constraint between the vertex and the closest
-// point of the closest triangle, carried by the cell that holds that point at rest, to go out
-// along the triangle's normal to the skin in front. Where the carried point and the flat
-// triangle's differ by more than the speculative distance the constraint would push the wrong
-// point: left out, as an edge contact's.
+// the skin and the speculative distance in front (find_vertex_contacts), becomes a
+// constraint between the vertex and the closest point of the closest triangle, carried by
+// the cell that holds that point at rest, to go out along the triangle's normal to the skin
+// in front. Where the carried point and the flat triangle's differ by more than the
+// speculative distance the constraint would push the wrong point: left out, as an edge
+// contact's.
 void find_vertex_constraints(const Model& model, State& state, StepMemory& scratch, StageCounters& counters,
                              double& max_depth) {
   struct Sink final : VertexContactSink {

@@ -467,14 +467,14 @@ void restore_inverted_cells(const Model& model, State& state, const DynamicsMemo
   parallel_for(pool, static_cast<std::uint32_t>(model.objects.size()), [&](std::uint32_t i, std::uint32_t) {
     const ObjectModel& obj = model.objects[i];
     if (obj.dynamics != DynamicsKind::MassSpring || has_cell_constraints(obj) || !memory.object_stepping[i]) return;
-    // The springs' own stiffness as a bulk modulus, K = k / cell size (Pa): a soft lattice
+    // The springs' live stiffness as a bulk modulus, K = k / cell size (Pa): a soft lattice
     // is not thrown upright harder than its springs would pull it.
-    const double modulus = obj.mass_spring.stiffness / obj.cell_size;
+    const double modulus = state.params.stiffness[i] / obj.cell_size;
     for (Index c = obj.cell_begin; c < obj.cell_end; ++c) {
       if (!cell_inverted(model, state, c)) continue;
       for (int pass = 0; pass < kUprightPasses; ++pass)
         for (int k = 0; k < 6; ++k) {
-          const Tetrahedron t = kuhn_tetrahedron(model, c, k, 0.0);
+          const Tetrahedron t = kuhn_tetrahedron(model, c, k);
           const VolumeGradient v = volume_gradient(model, t, state);
           const double C = v.volume - t.rest_volume;
           const double alpha_tilde = t.rest_volume / modulus / (h * h);  // XPBD: compliance / h^2

@@ -114,7 +114,7 @@ void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, W
 // A cell turned inside out (cell_inverted) of every stepping mass-spring object whose
 // springs alone hold its cells, pushed back upright: each tetrahedron of its Kuhn split
 // below its rest volume grown towards it (C = V - V0 >= 0, XPBD with compliance V0 / K,
-// K = the springs' stiffness over the cell size), in kUprightPasses Gauss-Seidel passes over
+// K = the springs' live stiffness over the cell size), in kUprightPasses Gauss-Seidel passes over
 // the six (they share nodes: one pass leaves some of them short). Springs are as content
 // with a cell's mirror image as with the cell, so a cell that a contact pushed a node of
 // through its opposite face stays inside out without this, and the surface it carries stays

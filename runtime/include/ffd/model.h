@@ -246,8 +246,8 @@ inline bool cell_inverted(const Model& model, const State& state, Index cell) {
 }
 
 // Tetrahedron k (0-5) of cell `cell`'s Kuhn split, around its diagonal from corner 0 to
-// corner 7, with its rest volume and `compliance`.
-Tetrahedron kuhn_tetrahedron(const Model& model, Index cell, int k, double compliance);
+// corner 7, corners ordered so that its rest volume is positive; compliance 0.
+Tetrahedron kuhn_tetrahedron(const Model& model, Index cell, int k);
 
 // Mass-weighted centre of one object's lattice nodes at positions x (m).
 inline Vec3 centre_of_mass(const Model& model, const std::vector<Vec3>& x, Index object) {
