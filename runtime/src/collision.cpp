@@ -978,8 +978,7 @@ void answer_crossed_edges(const Model& model, const BoxSet& boxes, State& state,
 }  // namespace
 
 bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index mover,
-                Index container, double margin) {
-  const BoxPlanes planes = box_planes(scratch.box_nodes[container]);
+                const BoxPlanes& planes, double margin) {
   if (planes.degenerate) return false;
   const int node_count = tested_node_count(level);
   for (int k = 0; k < node_count; ++k)
@@ -1156,7 +1155,7 @@ bool answer_in_waves(const Model& model, const BoxLevel& level, State& state, Co
 }  // namespace
 
 bool pair_hit(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index p,
-              double margin) {
+              double margin, const BoxPlanes* planes) {
   const BoxSet& boxes = *level.boxes;
   const BoxPair& pair = scratch.pairs[p];
   const Index o1 = model.cell_object[boxes.box_cell[pair.a]], o2 = model.cell_object[boxes.box_cell[pair.b]];
@@ -1164,9 +1163,19 @@ bool pair_hit(const Model& model, const BoxLevel& level, const State& state, con
   const double skin = other ? level.skin : 0.0;
   // (A pair of two sleepers is not looked at; should one of them wake before its turn, it is
   // tested then.)
-  return (state.asleep[o1] && state.asleep[o2]) || nodes_near(model, level, state, scratch, pair.a, pair.b, margin + skin) ||
-         nodes_near(model, level, state, scratch, pair.b, pair.a, margin + skin) ||
-         (other && model.box_skin > 0.0 && boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping);
+  if (state.asleep[o1] && state.asleep[o2]) return true;
+  const auto near = [&](Index mover, Index container) {
+    if (planes) return nodes_near(model, level, state, scratch, mover, planes[container], margin + skin);
+    return nodes_near(model, level, state, scratch, mover, box_planes(scratch.box_nodes[container]), margin + skin);
+  };
+  if (near(pair.a, pair.b) || near(pair.b, pair.a)) return true;
+  if (!other || !(model.box_skin > 0.0)) return false;
+  if (!planes) return boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping;
+  const BoxPlanes &planes_a = planes[pair.a], &planes_b = planes[pair.b];
+  return !planes_a.degenerate && !planes_b.degenerate &&
+         box_overlap(planes_a, scratch.box_nodes[pair.a].data(), 8, planes_b, scratch.box_nodes[pair.b].data(), 8,
+                     model.box_skin)
+             .overlapping;
 }
 
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,

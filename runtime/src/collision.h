@@ -208,15 +208,29 @@ bool scan_points_in_box(const CollisionMemory& scratch, Index container, double 
   return true;
 }
 
-// Whether a tested node of box `mover` lies inside box `container` grown by `margin` (m;
-// 0: inside the box itself). Read-only.
+// The same scan where nothing is answered at once (a detection that only reads), against the
+// container's planes taken already.
+template <class PointAt, class RelativeVelocity, class OnPoint>
+void scan_points_in_planes(const BoxPlanes& planes, double recent, int count, const PointAt& point_at,
+                           const RelativeVelocity& relative_velocity, const OnPoint& on_point) {
+  if (planes.degenerate) return;
+  const Vec3 relative = relative_velocity();
+  for (int k = 0; k < count; ++k) {
+    const Vec3 point = point_at(k);
+    on_point(k, point, node_in_box(planes, point, relative, recent), planes);
+  }
+}
+
+// Whether a tested node of box `mover` lies inside the box whose planes are `planes`, grown by
+// `margin` (m; 0: inside the box itself). Read-only.
 bool nodes_near(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index mover,
-                Index container, double margin);
+                const BoxPlanes& planes, double margin);
 
 // Whether candidate pair p has a tested node of one box inside the other grown by `margin`
-// (m), or its two objects sleep. Read-only.
+// (m), or its two objects sleep. Read-only. `planes`, where given, holds the planes of the
+// pair's boxes by box (box_planes of BoxMemory::box_nodes), taken already.
 bool pair_hit(const Model& model, const BoxLevel& level, const State& state, const CollisionMemory& scratch, Index p,
-              double margin);
+              double margin, const BoxPlanes* planes = nullptr);
 
 // The narrow phase's detection, read-only and over the pool: NarrowMemory::pair_hit[p] for each
 // candidate pair, whether a tested node of one box lies inside the other grown by `margin`

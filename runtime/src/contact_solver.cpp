@@ -212,7 +212,7 @@ void add_contact(const Bodies& bodies, StepMemory& scratch, const ContactRecord&
 // near a face of it (within kSpeculativeDistance outside: a speculative contact, which holds
 // the node at the face should the solve move it in, so that a resting contact stays in the
 // list from step to step). `on_contact(record, inside, node)` for each, node the tested
-// node's position. Read-only.
+// node's position. Read-only, against the planes take_pair_planes took.
 template <class OnContact>
 void pair_box_contacts(const Model& model, const BoxLevel& level, const State& state, const StepMemory& scratch, Index p,
                        const OnContact& on_contact) {
@@ -222,8 +222,8 @@ void pair_box_contacts(const Model& model, const BoxLevel& level, const State& s
   for (int half = 0; half < 2; ++half) {
     const Index mover = half == 0 ? pair.a : pair.b, container = half == 0 ? pair.b : pair.a;
     const Index cell_a = boxes.box_cell[container], cell_b = boxes.box_cell[mover];
-    scan_points_in_box(
-        scratch, container, 0.0, recent, tested_node_count(level),
+    scan_points_in_planes(
+        scratch.box_planes[container], recent, tested_node_count(level),
         [&](int k) { return tested_node(model, level, state, scratch, mover, k); },
         [&] { return Vec3(mean_velocity(state, model.cell_nodes[cell_b]) - mean_velocity(state, model.cell_nodes[cell_a])); },
         [&](int k, const Vec3& node, const NodeInBox& hit, const BoxPlanes& planes) {
@@ -231,7 +231,7 @@ void pair_box_contacts(const Model& model, const BoxLevel& level, const State& s
           double depth = hit.depth;
           if (!hit.inside) {
             const NearFace near = near_face(planes, node, margin);
-            if (near.face < 0) return false;
+            if (near.face < 0) return;
             face = near.face;
             depth = -near.height;
           }
@@ -244,9 +244,27 @@ void pair_box_contacts(const Model& model, const BoxLevel& level, const State& s
           r.face_box = container;
           r.face = static_cast<std::uint8_t>(face);
           on_contact(r, hit.inside, node);
-          return false;  // answered in the solve, not at once
         });
   }
+}
+
+// The planes of every candidate pair's boxes, once each (SolverMemory::box_planes).
+void take_pair_planes(StepMemory& scratch) {
+  const std::uint64_t mark = ++scratch.box_planes_epoch;
+  Index count = 0;
+  for (Index p = 0; p < scratch.pair_count; ++p)
+    for (const Index b : {scratch.pairs[p].a, scratch.pairs[p].b})
+      if (scratch.box_planes_mark[b] != mark) {
+        scratch.box_planes_mark[b] = mark;
+        scratch.planned_boxes[count++] = b;
+      }
+  constexpr Index kBoxesPerChunk = 64;
+  parallel_for(scratch.pool, (count + kBoxesPerChunk - 1) / kBoxesPerChunk, [&](std::uint32_t chunk, std::uint32_t) {
+    for (Index i = chunk * kBoxesPerChunk; i < std::min(count, (chunk + 1) * kBoxesPerChunk); ++i) {
+      const Index b = scratch.planned_boxes[i];
+      scratch.box_planes[b] = box_planes(scratch.box_nodes[b]);
+    }
+  });
 }
 
 }  // namespace
@@ -280,12 +298,13 @@ void find_box_contacts(const Model& model, const BoxLevel& level, State& state, 
   auto chunk_pairs = [&](std::uint32_t chunk) {
     return std::pair{chunk * kPairsPerChunk, std::min(pairs, (chunk + 1) * kPairsPerChunk)};
   };
+  take_pair_planes(scratch);
   // Pass 1: each pair's constraints and logged contacts (those inside), counted.
   parallel_for(scratch.pool, chunks, [&](std::uint32_t chunk, std::uint32_t) {
     const auto [begin, end] = chunk_pairs(chunk);
     for (Index p = begin; p < end; ++p) {
       std::array<Index, 2> found{0, 0};
-      if (pair_hit(model, level, state, scratch, p, kSpeculativeDistance))
+      if (pair_hit(model, level, state, scratch, p, kSpeculativeDistance, scratch.box_planes.data()))
         pair_box_contacts(model, level, state, scratch, p, [&](const ContactRecord&, bool inside, const Vec3&) {
           ++found[0];
           found[1] += inside ? 1 : 0;

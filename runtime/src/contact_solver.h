@@ -33,6 +33,7 @@
 
 #include "boxes.h"
 #include "contact_record.h"
+#include "ffd/box_test.h"
 #include "ffd/model.h"
 #include "ffd/state.h"
 #include "ffd/step.h"
@@ -107,6 +108,13 @@ struct SolverMemory {
   // its constraints and its logged contacts start (a running count, pairs + 1 entries), and
   // each thread's share of the counts.
   std::vector<std::array<Index, 2>> pair_contacts;
+  // The planes of the candidate pairs' boxes (box_planes[b], for the boxes listed in
+  // planned_boxes), taken once a step before the detection, which moves no box, where each
+  // test of a pair took them again; box_planes_mark[b] == box_planes_epoch marks a box taken.
+  std::vector<BoxPlanes> box_planes;
+  std::vector<std::uint64_t> box_planes_mark;
+  std::uint64_t box_planes_epoch = 0;
+  std::vector<Index> planned_boxes;
   struct ContactShare {
     std::uint32_t self_contacts = 0, inter_contacts = 0;
     double max_depth = 0.0;  // m

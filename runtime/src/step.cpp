@@ -129,6 +129,9 @@ void size_solver_memory(const Model& model, SolverMemory& s) {
   s.object_motion.resize(model.objects.size());
   s.node_stamp.assign(model.node_count(), 0);
   s.contact_shares.resize(1);
+  s.box_planes.resize(largest_box_set(model));
+  s.box_planes_mark.assign(largest_box_set(model), 0);
+  s.planned_boxes.resize(largest_box_set(model));
 }
 
 }  // namespace
