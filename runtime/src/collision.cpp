@@ -988,13 +988,20 @@ bool nodes_near(const Model& model, const BoxLevel& level, const State& state, c
 
 namespace {
 
-// box_overlap() on boxes a and b as the scratch holds them; a degenerate box overlaps nothing.
-BoxOverlap boxes_overlap(const CollisionMemory& scratch, Index a, Index b, double skin,
-                         const Vec3& relative_velocity = Vec3::Zero(), double recent = 0.0) {
-  const BoxPlanes planes_a = box_planes(scratch.box_nodes[a]), planes_b = box_planes(scratch.box_nodes[b]);
+// box_overlap() on boxes a and b as the scratch holds them, their planes given; a degenerate
+// box overlaps nothing.
+BoxOverlap boxes_overlap(const CollisionMemory& scratch, Index a, const BoxPlanes& planes_a, Index b,
+                         const BoxPlanes& planes_b, double skin, const Vec3& relative_velocity = Vec3::Zero(),
+                         double recent = 0.0) {
   if (planes_a.degenerate || planes_b.degenerate) return BoxOverlap{};
   return box_overlap(planes_a, scratch.box_nodes[a].data(), 8, planes_b, scratch.box_nodes[b].data(), 8, skin,
                      relative_velocity, recent);
+}
+// The same, the planes taken here.
+BoxOverlap boxes_overlap(const CollisionMemory& scratch, Index a, Index b, double skin,
+                         const Vec3& relative_velocity = Vec3::Zero(), double recent = 0.0) {
+  return boxes_overlap(scratch, a, box_planes(scratch.box_nodes[a]), b, box_planes(scratch.box_nodes[b]), skin,
+                       relative_velocity, recent);
 }
 
 // "box_overlap": boxes b1 and b2 of two objects, their nodes answered, that still overlap
@@ -1170,12 +1177,8 @@ bool pair_hit(const Model& model, const BoxLevel& level, const State& state, con
   };
   if (near(pair.a, pair.b) || near(pair.b, pair.a)) return true;
   if (!other || !(model.box_skin > 0.0)) return false;
-  if (!planes) return boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping;
-  const BoxPlanes &planes_a = planes[pair.a], &planes_b = planes[pair.b];
-  return !planes_a.degenerate && !planes_b.degenerate &&
-         box_overlap(planes_a, scratch.box_nodes[pair.a].data(), 8, planes_b, scratch.box_nodes[pair.b].data(), 8,
-                     model.box_skin)
-             .overlapping;
+  return planes ? boxes_overlap(scratch, pair.a, planes[pair.a], pair.b, planes[pair.b], model.box_skin).overlapping
+                : boxes_overlap(scratch, pair.a, pair.b, model.box_skin).overlapping;
 }
 
 void find_pair_hits(const Model& model, const BoxLevel& level, const State& state, CollisionMemory& scratch,

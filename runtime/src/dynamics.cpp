@@ -233,10 +233,12 @@ SpringSolve predict_mass_spring(const Model& model, const ObjectModel& obj, doub
 
 // The object's positions into the kernel's node records (kNodeRecord), and back.
 void nodes_to_records(const ObjectModel& obj, const State& state, DynamicsMemory& memory) {
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) copy_position(state.x[n].data(), memory.node_record.get() + kNodeRecord * n);
+  for (Index n = obj.node_begin; n < obj.node_end; ++n)
+    copy_position(state.x[n].data(), memory.node_record.get() + kNodeRecord * n);
 }
 void records_to_nodes(const ObjectModel& obj, State& state, const DynamicsMemory& memory) {
-  for (Index n = obj.node_begin; n < obj.node_end; ++n) copy_position(memory.node_record.get() + kNodeRecord * n, state.x[n].data());
+  for (Index n = obj.node_begin; n < obj.node_end; ++n)
+    copy_position(memory.node_record.get() + kNodeRecord * n, state.x[n].data());
 }
 
 bool has_cell_constraints(const ObjectModel& obj) {
