@@ -109,8 +109,9 @@ struct SolverMemory {
   // each thread's share of the counts.
   std::vector<std::array<Index, 2>> pair_contacts;
   // The planes of the candidate pairs' boxes (box_planes[b], for the boxes listed in
-  // planned_boxes), taken once a step before the detection, which moves no box, where each
-  // test of a pair took them again; box_planes_mark[b] == box_planes_epoch marks a box taken.
+  // planned_boxes), taken once a step before the detection: it moves no box, and a box is
+  // tested in many pairs, up to six times in each. box_planes_mark[b] == box_planes_epoch
+  // marks a box taken.
   std::vector<BoxPlanes> box_planes;
   std::vector<std::uint64_t> box_planes_mark;
   std::uint64_t box_planes_epoch = 0;
