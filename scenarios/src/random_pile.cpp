@@ -53,6 +53,7 @@ std::string random_pile_scene(const PileOptions& o) {
   if (o.min_cells < 1 || o.max_cells < o.min_cells || o.max_cells > 64)
     throw std::invalid_argument("random pile: cells across must satisfy 1 <= min <= max <= 64");
   if (!(o.cell_size > 0.0) || !std::isfinite(o.cell_size)) throw std::invalid_argument("random pile: cell_size must be > 0");
+  if (o.iterations < 1 || o.iterations > 100) throw std::invalid_argument("random pile: iterations must be in 1..100");
 
   Draw draw(o.seed);
   const double largest = o.max_cells * o.cell_size;  // m, the largest size any object can draw
@@ -103,7 +104,8 @@ std::string random_pile_scene(const PileOptions& o) {
     const double mass = (size / 0.3) * (size / 0.3);
     objects += "\n[[object]]\nname = \"" + name + "\"\n" + surface + "position = " + vec3(x, y, z) +
                "\nrotation_deg = " + vec3(rx, ry, rz) + "\ncell_size = " + number(o.cell_size) +
-               "\nmass = " + number(mass) + "\nmass_spring = { stiffness = 5000.0, damping = 0.5, iterations = 4 }\n";
+               "\nmass = " + number(mass) + "\nmass_spring = { stiffness = 5000.0, damping = 0.5, iterations = " +
+               std::to_string(o.iterations) + " }\n";
   }
 
   std::string scene =

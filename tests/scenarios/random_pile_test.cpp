@@ -48,6 +48,17 @@ TEST_CASE("a random pile is the same for the same seed and differs between seeds
   options.solver_substeps = true;
   CHECK(ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").settings.solver_substeps);
   options.solver_substeps = false;
+  // Every object's lattice sweeps as asked, read back; out of 1..100 refused.
+  for (const ffd::ObjectSpec& object : ffd::parse_scene(first, "pile_7.toml", "").objects)
+    CHECK(object.mass_spring.iterations == 4);
+  options.iterations = 8;
+  for (const ffd::ObjectSpec& object : ffd::parse_scene(ffd::random_pile_scene(options), "pile_7.toml", "").objects)
+    CHECK(object.mass_spring.iterations == 8);
+  options.iterations = 0;
+  CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
+  options.iterations = 101;
+  CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
+  options.iterations = 4;
   options.objects = 0;
   CHECK_THROWS_AS(ffd::random_pile_scene(options), std::invalid_argument);
   options.objects = 6;

@@ -19,6 +19,7 @@ struct PileRun {
   bool box_overlap = false;    // the scene's [simulation] box_overlap
   bool edge_contacts = false;  // the scene's [simulation] edge_contacts (the paper's response has them at levels 4 and 5 always)
   bool substeps = false;       // the solver's sweeps ran as substeps ([simulation] solver_substeps)
+  int iterations = 0;          // the objects' mass_spring.iterations (a pile gives every object the same)
   std::uint64_t steps = 0, sample_every = 0;
   // Intersecting triangle pairs (surface_intersections.h: between objects and within one,
   // rest-shape pairs left out) every `sample_every` steps, from the start.

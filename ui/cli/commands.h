@@ -131,6 +131,7 @@ struct PilesOptions {
   bool box_overlap = false;          // every pile with [simulation] box_overlap = true
   bool edge_contacts = true;         // every pile with [simulation] edge_contacts = true (the default)
   bool solver_substeps = false;      // every pile with [simulation] solver_substeps = true
+  int iterations = 4;                // every object's mass_spring.iterations
   std::string results_page;          // --update-docs: the results page to write
   bool require_clean = false;        // exit 4 unless every pile ends clean
   int threads = 0;

@@ -45,6 +45,11 @@ void register_piles(CLI::App& app, PilesOptions& o) {
   cmd->add_flag("--solver-substeps", o.solver_substeps,
                 "Every pile with [simulation] solver_substeps = true (the response solver's sweeps as substeps; at "
                 "level 5 only with edge contacts)");
+  cmd->add_option("--iterations", o.iterations,
+                  "Every object's mass_spring.iterations: its lattice's sweeps a step (more: a stiffer lattice under "
+                  "its contacts, and a slower step)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   cmd->add_flag("--require-clean", o.require_clean,
                 "Exit 4 (a check failed) unless every pile ends clean: at rest, no pair in the last second, no crossing "
                 "longer than 50 ms");
@@ -74,6 +79,7 @@ int run_piles_command(const PilesOptions& o) {
       pile.box_overlap = o.box_overlap;
       pile.edge_contacts = o.edge_contacts;
       pile.solver_substeps = o.solver_substeps;
+      pile.iterations = o.iterations;
       const std::string text = ffd::random_pile_scene(pile);
       const std::string origin = "pile_" + std::to_string(seed) + ".toml";
       if (!o.scenes_dir.empty()) write_file(std::filesystem::path(o.scenes_dir) / origin, text);

@@ -15,6 +15,10 @@ struct PileOptions {
   double cell_size = 0.01;  // m, every object's FFD lattice cell
   // Each object's size across (its largest extent before rotation) in cells, drawn uniformly.
   int min_cells = 3, max_cells = 12;
+  // Each object's mass_spring.iterations: Gauss-Seidel sweeps of its lattice a step. The
+  // lattices are soft (5000 N/m springs): in few sweeps a heavy object's contacts push the
+  // nodes under them through a thin partner before the lattice around them follows.
+  int iterations = 4;
   // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
   std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf";
   bool box_overlap = false;    // written as [simulation] box_overlap = true
@@ -26,7 +30,7 @@ struct PileOptions {
 // floor, inside four walls twice the largest object across; their bounding spheres do not
 // overlap, so no two surfaces touch at the start. Inelastic contacts (alpha = 1) with
 // friction (beta = 0.5), self-collision on. Throws std::invalid_argument on options out of
-// range (objects 1..64, cells 1 <= min <= max <= 64, cell_size > 0).
+// range (objects 1..64, cells 1 <= min <= max <= 64, cell_size > 0, iterations 1..100).
 std::string random_pile_scene(const PileOptions& options);
 
 }  // namespace ffd
