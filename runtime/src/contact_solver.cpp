@@ -820,6 +820,8 @@ std::array<double, 2> rebound(const Model& model, State& state, StepMemory& scra
   return added;
 }
 
+enum class Rebound { No, Yes };  // the rebound once a step: not after each substep
+
 // The velocities after the solve, contact by contact in list order, for each contact that
 // pushed: eq. 8 on its two cells' nodes, relative to the pair's mass-weighted mean velocity
 // v_ref, with the normal part stopped; then the rebound: -(1 - alpha) of the approach the
@@ -828,8 +830,8 @@ std::array<double, 2> rebound(const Model& model, State& state, StepMemory& scra
 // solve). So alpha and beta mean what they mean in the paper (beta as Coulomb's mu), and a
 // position correction of the solve never leaves as metres per second (v = dx / dt of a
 // millimetre is 1 m/s).
-void answer_velocities(const Model& model, State& state, StepMemory& scratch, double beta) {
-  const bool rebounds = state.params.alpha < 1.0;
+void answer_velocities(const Model& model, State& state, StepMemory& scratch, double beta, Rebound rebound_now) {
+  const bool rebounds = rebound_now == Rebound::Yes && state.params.alpha < 1.0;
   const double energy_before = rebounds ? answered_energy(model, state, scratch) : 0.0;  // J
   for (Index i = 0; i < scratch.constraint_count; ++i) {
     const ContactConstraint& c = scratch.constraints[i];
@@ -1093,6 +1095,14 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
     // lattice gives way around them: a node pushed through its cell's opposite face leaves
     // the cell inside out, which the next sweep's springs would keep.
     if (keep_upright) restore_inverted_cells(model, state, scratch, scratch.pool);
+    // Each substep's velocities answered as the step's are (XPBD with small steps, Macklin et
+    // al. 2019, has a velocity pass per substep): a correction within a substep otherwise
+    // leaves as depth / h into the next one's prediction, and a box dropped on another
+    // bounced on it for half a second. The rebound stays once a step, at its end.
+    if (substeps && it + 1 < iterations) {
+      end_substep(model, state, scratch, scratch.pool);
+      answer_velocities(model, state, scratch, beta, Rebound::No);
+    }
   }
   // The planes have the last word: a node the sweeps left below a plane is put back on it.
   // Without this pass the last contacts of a pass (the probe's) pushed a box's nodes through
@@ -1111,11 +1121,11 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
   if (has(model.settings.effects, Effect::Probe)) {
     ProbeState& probe = state.probe;
     probe.v = (probe.x - scratch.probe_x_prev) / dt;
-    answer_velocities(model, state, scratch, beta);
+    answer_velocities(model, state, scratch, beta, Rebound::Yes);
     damp_on_supports(model, state, scratch, beta);
     probe.force = probe_force(model, state, scratch.probe_device_velocity);
   } else {
-    answer_velocities(model, state, scratch, beta);
+    answer_velocities(model, state, scratch, beta, Rebound::Yes);
     damp_on_supports(model, state, scratch, beta);
   }
   if (grabbing) state.grab.force = scratch.grab_force;

@@ -679,7 +679,7 @@ void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memo
     for (Index n = obj.node_begin; n < obj.node_end; ++n) {
       // The step's v holds all of g dt; substep 0 keeps g h of it, each later one adds g h.
       const Vec3 u = k == 0 ? Vec3(state.v[n] + memory.substep_gravity * (h - dt))
-                            : Vec3(substep_velocity(memory, n, h, state.x[n], state.v[n]) + memory.substep_gravity * h);  // m/s
+                            : Vec3(state.v[n] + memory.substep_gravity * h);  // m/s: end_substep's
       const Vec3 x_sub = k == 0 ? memory.x_prev[n] : state.x[n];
       copy_position(x_sub.data(), memory.start_record.get() + kNodeRecord * n);
       state.v[n] = u;
@@ -690,6 +690,15 @@ void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memo
     for (Index t = obj.tetrahedron_begin; t < obj.tetrahedron_end; ++t) memory.tetrahedron_lambda[t] = 0.0;
     if (obj.mass_spring.shape_stiffness > 0.0)
       for (Index c = obj.cell_begin; c < obj.cell_end; ++c) memory.cell_shape_lambda[c] = 0.0;
+  });
+}
+
+void end_substep(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool) {
+  const double h = model.settings.dt / memory.substeps;  // s
+  parallel_for(pool, memory.object_task_count, [&](std::uint32_t task, std::uint32_t) {
+    const ObjectModel& obj = model.objects[memory.object_tasks[task]];
+    if (obj.dynamics != DynamicsKind::MassSpring) return;
+    for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] = substep_velocity(memory, n, h, state.x[n], state.v[n]);
   });
 }
 
