@@ -1097,8 +1097,8 @@ void solve_contacts(const Model& model, State& state, StepMemory& scratch) {
     if (keep_upright) restore_inverted_cells(model, state, scratch, scratch.pool);
     // Each substep's velocities answered as the step's are (XPBD with small steps, Macklin et
     // al. 2019, has a velocity pass per substep): a correction within a substep otherwise
-    // leaves as depth / h into the next one's prediction, and a box dropped on another
-    // bounced on it for half a second. The rebound stays once a step, at its end.
+    // leaves as depth / h into the next one's prediction, a bounce that no rest damps out.
+    // The rebound stays once a step, at its end.
     if (substeps && it + 1 < iterations) {
       end_substep(model, state, scratch, scratch.pool);
       answer_velocities(model, state, scratch, beta, Rebound::No);

@@ -107,12 +107,13 @@ int dynamics_iterations(const Model& model);  // the most sweeps an object asks 
 void sweep_dynamics(const Model& model, int iteration, State& state, DynamicsMemory& memory, WorkerPool* pool);
 // Substep k of memory.substeps (h = dt / substeps) of every stepping mass-spring object: the
 // substep's start x_sub (start_record) and its prediction x = x_sub + h u, with u kept in v
-// until finish_dynamics: the substep before's velocity plus g h (at k = 0: the step's v, with
-// g h of its g dt); the multipliers reset (XPBD with small steps, Macklin et al. 2019).
-// The velocities at the end of a substep but the last (which finish_dynamics takes), from
-// where its constraints left the nodes; begin_substep predicts the next substep from them.
-void end_substep(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
+// until the substep ends: the substep before's velocity (end_substep's) plus g h (at k = 0:
+// the step's v, with g h of its g dt); the multipliers reset (XPBD with small steps, Macklin
+// et al. 2019).
 void begin_substep(const Model& model, int k, State& state, DynamicsMemory& memory, WorkerPool* pool);
+// The velocities at the end of a substep but the last (finish_dynamics takes the last's), from
+// where its constraints left the nodes: u plus their move from the prediction over h.
+void end_substep(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
 void finish_dynamics(const Model& model, State& state, DynamicsMemory& memory, WorkerPool* pool);
 // A cell turned inside out (cell_inverted) of every stepping mass-spring object whose
 // springs alone hold its cells, pushed back upright: each tetrahedron of its Kuhn split
