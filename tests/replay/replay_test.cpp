@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <fstream>
 #include <thread>
 
@@ -410,6 +411,26 @@ speed_max_m_s = 0.01
   CHECK_THAT(text, Contains("FAIL stability.energy_gain_max_j:") && Contains("initial ") && Contains("probe work 0 J"));
   CHECK_THAT(text, Contains("FAIL position[high]: high at [") && Contains("m outside"));
   CHECK_THAT(text, Contains("FAIL rest.speed_max_m_s:") && Contains("(high, step 100)"));
+}
+
+TEST_CASE("Replay: an energy gain within the energy sums' rounding passes, a larger one fails") {
+  // The same settling run, its limit set just below the gain it measures: half the rounding
+  // allowance (kEnergyRounding x the energies compared, about 5e-12 J here) below passes, twice
+  // it below fails.
+  const std::string head = "version = 1\nscene = \"" + kScene + "\"\nsteps = 300\n[[event]]\nat_step = 0\nalpha = 1.0\n";
+  auto run = [&](double limit) {
+    std::ostringstream script;
+    script.precision(17);
+    script << head << "[assert.stability]\nenergy_gain_max_j = " << limit << "\n";
+    return run_replay(parse(script.str()), ReplayRunOptions{});
+  };
+  const ReplayResult measured = run(1.0);
+  REQUIRE(measured.passed());
+  const double gain = measured.max_energy_gain_j;  // J
+  const double allowance = kEnergyRounding * (std::abs(gain + measured.initial_energy_j) + std::abs(measured.initial_energy_j));
+  REQUIRE(allowance > 0.0);
+  CHECK(run(gain - 0.5 * allowance).passed());
+  CHECK_FALSE(run(gain - 2.0 * allowance).passed());
 }
 
 TEST_CASE("Replay: the probe's work counts as energy put in") {

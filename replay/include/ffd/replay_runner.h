@@ -70,6 +70,10 @@ struct ReplayResult {
 };
 
 inline constexpr double kRestRmsSpeed = 0.005;  // m/s: ReplayResult::time_to_rest_s
+// The energy is a sum over every node, good to about this share of its size: a gain below
+// kEnergyRounding x (the energies compared) is the sums' rounding, not energy put in
+// (stability.energy_gain_max_j).
+inline constexpr double kEnergyRounding = 1e-12;
 
 struct ReplayRunOptions {
   Pacing pacing = Pacing::Fast;
