@@ -964,35 +964,36 @@ void damp_on_supports(const Model& model, State& state, StepMemory& scratch, dou
     }
   }
   // A multiplier is an impulse times the time it acted over, h (the step, or the substep:
-  // the load then sums the substeps'), so the step's normal force is load / (h dt).
-  const double h = model.settings.dt / scratch.substeps;  // s
+  // the load then sums the substeps'), so the step's normal force is load / (h dt). Both
+  // caps below are what that force gives in h, load / dt: a step's worth without substeps,
+  // one substep's with them. A step's worth with substeps made both act too hard: the
+  // support damping pressed two stacked slabs into each other and correcting that depth
+  // gave energy back, and the rolling resistance left random piles of thin parts crossed.
+  const double dt = model.settings.dt;  // s
   for (std::size_t o = 0; o < scratch.object_motion.size(); ++o) {
     const SolverMemory::ObjectMotion& s = scratch.object_motion[o];
     if (!s.touched || !(s.load > 0.0)) continue;
     const ObjectModel& obj = model.objects[o];
     // Rolling resistance: the angular impulse that stops the relative spin, capped at
-    // resistance x normal force (load / (h dt)) x radius of gyration x dt.
+    // resistance x (load / dt) x radius of gyration.
     const Eigen::FullPivLU<Mat3> lu(s.inertia);  // 3 x 3: cheaper to redo than to keep
     const double radius = std::sqrt(0.5 * s.inertia.trace() / s.mass);
     const Vec3 relative_spin = s.omega - s.support_spin / s.load;
     if (resistance > 0.0 && lu.isInvertible() && relative_spin.norm() * radius > kSpinNoise) {
       const Vec3 stop = -(s.inertia * relative_spin);  // N m s
-      const double most = resistance * (s.load / h) * radius, size = stop.norm();
+      const double most = resistance * (s.load / dt) * radius, size = stop.norm();
       const Vec3 change = never_faster(s.omega, lu.solve(size > most ? Vec3(stop * (most / size)) : stop));  // rad/s
       const Vec3 pivot = s.pivot / s.load;
       for (Index n = obj.node_begin; n < obj.node_end; ++n) state.v[n] += change.cross(state.x[n] - pivot);
     }
     // Support damping: alpha of the relative normal velocity, capped at what the resting
-    // contacts' normal force changes in h (resting_load / dt / m): a step, or with substeps
-    // one substep. A step's worth with substeps let the damping press objects into their
-    // supports, and correcting that depth gave the energy back: two stacked slabs gained
-    // energy and bounced apart.
+    // contacts' share of the load changes (resting_load / dt / m).
     const double up_size = s.up.norm();
     if (alpha > 0.0 && s.resting_load > 0.0 && up_size > 0.0) {
       const Vec3 up = s.up / up_size;
       const Vec3 support = s.support_velocity / s.resting_load;
       const double relative = up.dot(s.velocity - support);  // m/s
-      const double most = s.resting_load / model.settings.dt / s.mass;
+      const double most = s.resting_load / dt / s.mass;
       Vec3 change = -alpha * std::clamp(relative, -most, most) * up;
       // Supports moving slower than this are still: their nodes' noise is not followed.
       if (std::fabs(up.dot(support)) < kRestingApproach) change = never_faster(s.velocity.dot(up) * up, change);
