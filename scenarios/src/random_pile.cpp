@@ -104,7 +104,7 @@ std::string random_pile_scene(const PileOptions& o) {
     const double mass = (size / 0.3) * (size / 0.3);
     objects += "\n[[object]]\nname = \"" + name + "\"\n" + surface + "position = " + vec3(x, y, z) +
                "\nrotation_deg = " + vec3(rx, ry, rz) + "\ncell_size = " + number(o.cell_size) +
-               "\nmass = " + number(mass) + "\nmass_spring = { stiffness = 5000.0, damping = 0.5, iterations = " +
+               "\nmass = " + number(mass) + "\nmass_spring = { stiffness = " + number(kPileSpringStiffness) + ", damping = 0.5, iterations = " +
                std::to_string(o.iterations) + " }\n";
   }
 

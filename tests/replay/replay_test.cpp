@@ -6,9 +6,9 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
-#include <fstream>
 #include <thread>
 
 #include "ffd/physics_loop.h"

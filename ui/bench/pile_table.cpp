@@ -8,6 +8,7 @@
 #include <tuple>
 #include <utility>
 
+#include "ffd/random_pile.h"
 #include "ffd/step.h"
 #include "ffd/surface_intersections.h"
 #include "ffd/worker_pool.h"
@@ -113,8 +114,8 @@ std::string markdown_piles(const std::vector<PileRun>& runs, const std::string& 
   const std::uint64_t steps = runs.front().steps;
   s << "Measured by `ffdsim piles` on " << cpu << ": " << seeds.size() << " random piles (seeds " << seeds.front() << "-"
     << seeds.back() << ") of " << objects
-    << " objects each (rings, tori, thin plates, bowls, letters; 3 to 12 cells of 1 cm across, lattices of 5000 N/m springs swept "
-    << runs.front().iterations << " times a step), dropped into a box and run " << steps
+    << " objects each (rings, tori, thin plates, bowls, letters; 3 to 12 cells of 1 cm across, lattices of "
+    << ffd::kPileSpringStiffness << " N/m springs swept " << runs.front().iterations << " times a step), dropped into a box and run " << steps
     << " steps (1 ms) at each level and response. Intersecting triangle pairs of the surfaces (between objects and "
        "within one) counted every "
     << runs.front().sample_every

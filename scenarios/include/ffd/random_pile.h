@@ -9,6 +9,8 @@
 
 namespace ffd {
 
+inline constexpr double kPileSpringStiffness = 5000.0;  // N/m, every pile object's lattice springs
+
 struct PileOptions {
   std::uint64_t seed = 1;
   int objects = 6;
@@ -16,7 +18,7 @@ struct PileOptions {
   // Each object's size across (its largest extent before rotation) in cells, drawn uniformly.
   int min_cells = 3, max_cells = 12;
   // Each object's mass_spring.iterations: Gauss-Seidel sweeps of its lattice a step. The
-  // lattices are soft (5000 N/m springs): in few sweeps a heavy object's contacts push the
+  // lattices are soft (kPileSpringStiffness): in few sweeps a heavy object's contacts push the
   // nodes under them through a thin partner before the lattice around them follows.
   int iterations = 4;
   // The letters' font (the one the alphabet scene uses: fonts-dejavu-core).
